@@ -1,0 +1,173 @@
+//! `#[repr(C)]` Pod types shared with WGSL. Each is declared here once.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Primitive id of a miss.
+pub const INVALID_ID: u32 = u32::MAX;
+
+/// A ray segment `origin + t * dir` for `t` in `[tmin, tmax]`.
+///
+/// repr(C), Pod, 32 bytes; matches WGSL `struct Ray { origin: vec3<f32>, tmin: f32, dir: vec3<f32>, tmax: f32 }`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Ray {
+    pub origin: [f32; 3],
+    pub tmin: f32,
+    pub dir: [f32; 3],
+    pub tmax: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Self {
+        Self { origin: origin.to_array(), tmin, dir: dir.to_array(), tmax }
+    }
+    pub fn origin(&self) -> Vec3 {
+        Vec3::from_array(self.origin)
+    }
+    pub fn dir(&self) -> Vec3 {
+        Vec3::from_array(self.dir)
+    }
+    /// Point at parameter `t`, written out (no fused multiply-add).
+    pub fn at(&self, t: f32) -> Vec3 {
+        Vec3::new(
+            self.origin[0] + t * self.dir[0],
+            self.origin[1] + t * self.dir[1],
+            self.origin[2] + t * self.dir[2],
+        )
+    }
+    /// Why this ray cannot be traced, if it cannot: non-finite values, a zero
+    /// direction, or an empty or negative parameter range.
+    pub fn validate(&self) -> Result<(), RayProblem> {
+        if !self.origin.iter().all(|c| c.is_finite()) {
+            return Err(RayProblem::NonFiniteOrigin);
+        }
+        if !self.dir.iter().all(|c| c.is_finite()) {
+            return Err(RayProblem::NonFiniteDirection);
+        }
+        if self.dir == [0.0; 3] {
+            return Err(RayProblem::ZeroDirection);
+        }
+        if self.tmin.is_nan() || self.tmax.is_nan() {
+            return Err(RayProblem::NanRange);
+        }
+        if !(self.tmin >= 0.0) || self.tmin.is_infinite() {
+            return Err(RayProblem::BadTmin);
+        }
+        if self.tmax < self.tmin {
+            return Err(RayProblem::EmptyRange);
+        }
+        Ok(())
+    }
+}
+
+/// What is wrong with a ray (see [`Ray::validate`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum RayProblem {
+    #[error("origin is not finite")]
+    NonFiniteOrigin,
+    #[error("direction is not finite")]
+    NonFiniteDirection,
+    #[error("direction is zero")]
+    ZeroDirection,
+    #[error("tmin or tmax is NaN")]
+    NanRange,
+    #[error("tmin must be finite and >= 0")]
+    BadTmin,
+    #[error("tmax < tmin")]
+    EmptyRange,
+}
+
+/// The closest hit of a ray: primitive id, ray parameter and barycentrics
+/// (`u` weights vertex 1, `v` weights vertex 2). `prim == INVALID_ID` is a miss.
+///
+/// repr(C), Pod, 16 bytes; matches WGSL `struct Hit { prim: u32, t: f32, u: f32, v: f32 }`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Hit {
+    pub prim: u32,
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+impl Hit {
+    pub const MISS: Hit = Hit { prim: INVALID_ID, t: f32::INFINITY, u: 0.0, v: 0.0 };
+
+    pub fn is_hit(&self) -> bool {
+        self.prim != INVALID_ID
+    }
+
+    /// The deterministic order of §2: smaller `t` first, then smaller primitive id.
+    /// Keeping the minimum under this order makes the result independent of the
+    /// order in which candidates are tested.
+    pub fn closer_than(&self, other: &Hit) -> bool {
+        self.t < other.t || (self.t == other.t && self.prim < other.prim)
+    }
+
+    /// Bitwise equality (`t`, `u`, `v` compared as bits).
+    pub fn bits(&self) -> [u32; 4] {
+        [self.prim, self.t.to_bits(), self.u.to_bits(), self.v.to_bits()]
+    }
+}
+
+impl Default for Hit {
+    fn default() -> Self {
+        Self::MISS
+    }
+}
+
+/// A world-space triangle in the flattened scene order.
+///
+/// repr(C), Pod, 36 bytes; stored in WGSL as 9 consecutive `f32` of an `array<f32>`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Triangle {
+    pub v: [[f32; 3]; 3],
+}
+
+impl Triangle {
+    pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Self {
+        Self { v: [a.to_array(), b.to_array(), c.to_array()] }
+    }
+    pub fn vertex(&self, i: usize) -> Vec3 {
+        Vec3::from_array(self.v[i])
+    }
+    pub fn is_finite(&self) -> bool {
+        self.v.iter().flatten().all(|c| c.is_finite())
+    }
+}
+
+/// Axis-aligned bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn of_triangles(tris: &[Triangle]) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for t in tris {
+            for i in 0..3 {
+                b.grow(t.vertex(i));
+            }
+        }
+        b
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+}
