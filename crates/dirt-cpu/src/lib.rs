@@ -57,6 +57,26 @@ pub struct RayStats {
     pub tests: u32,
 }
 
+/// Structure statistics (printed by `dirt info`).
+#[derive(Clone, Debug, Default)]
+pub struct AdsStats {}
+
+impl std::fmt::Display for AdsStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "(statistics pending)")
+    }
+}
+
+/// Memory per structure next to the 001 Table 3 model (printed by `dirt info`).
+#[derive(Clone, Debug, Default)]
+pub struct MemoryReport {}
+
+impl std::fmt::Display for MemoryReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "(memory pending)")
+    }
+}
+
 /// The acceleration structure.
 #[derive(Debug)]
 pub struct Ads {}
@@ -64,6 +84,20 @@ pub struct Ads {}
 impl Ads {
     pub fn build(_tris: &[Triangle], _params: &AdsParams) -> Result<Ads, CpuError> {
         Err(CpuError::InvalidParams("not built yet".into()))
+    }
+    pub fn stats(&self) -> AdsStats {
+        AdsStats::default()
+    }
+    pub fn memory(&self) -> MemoryReport {
+        MemoryReport::default()
+    }
+}
+
+/// Ground truth: every ray against every triangle with the same triangle test.
+pub mod brute_force {
+    use dirt_math::{Hit, Ray, Triangle};
+    pub fn trace(_tris: &[Triangle], rays: &[Ray]) -> Vec<Hit> {
+        vec![Hit::MISS; rays.len()]
     }
 }
 
