@@ -1,0 +1,117 @@
+//! Depth buckets of a tile (001 eq. 1): `b = floor(B * (z - zmin) / (zmax - zmin))`,
+//! clamped to `[0, B-1]`.
+//!
+//! The division is only an estimate; the bucket is then fixed up with
+//! multiplications and comparisons, which every Vulkan implementation rounds
+//! correctly. The result is exactly `max { k in 0..B : fl(k * range) <= fl((z - zmin) * B) }`,
+//! so the CPU and a GPU get the same bucket for the same bits, and the map is
+//! monotonic in `z` (both sides of the comparison are monotonic roundings).
+
+/// Bucket of depth `z` in a tile with depth bounds `[zmin, zmax]` and `buckets` buckets.
+#[inline]
+pub fn bucket_of(z: f32, zmin: f32, zmax: f32, buckets: u32) -> u32 {
+    if buckets <= 1 {
+        return 0;
+    }
+    let range = zmax - zmin;
+    let x = (z - zmin) * buckets as f32;
+    if !(range > 0.0) || !(x > 0.0) {
+        return 0;
+    }
+    let last = buckets - 1;
+    let est = x / range;
+    let mut k = if est >= last as f32 { last } else if est >= 0.0 { est as u32 } else { 0 };
+    while k > 0 && k as f32 * range > x {
+        k -= 1;
+    }
+    while k < last && (k + 1) as f32 * range <= x {
+        k += 1;
+    }
+    k
+}
+
+/// Inclusive bucket range covered by the depth interval `[z0, z1]` (`z0 <= z1`),
+/// or `None` when it misses `[zmin, zmax]`.
+#[inline]
+pub fn bucket_range(z0: f32, z1: f32, zmin: f32, zmax: f32, buckets: u32) -> Option<(u32, u32)> {
+    if !(z1 >= zmin && z0 <= zmax) {
+        return None;
+    }
+    Some((bucket_of(z0, zmin, zmax, buckets), bucket_of(z1, zmin, zmax, buckets)))
+}
+
+/// A depth no larger than any depth whose bucket is `>= k`: where the ray enters
+/// bucket `k` when it moves to larger depths. Rounded down generously so that the
+/// early exit built on it can never skip a closer hit.
+#[inline]
+pub fn bucket_floor_depth(k: u32, zmin: f32, zmax: f32, buckets: u32) -> f32 {
+    if k == 0 || buckets <= 1 {
+        return f32::NEG_INFINITY;
+    }
+    let range = zmax - zmin;
+    // True boundary is zmin + k*range/B; every rounding on the way is far below 2^-10 of range.
+    zmin + range * (k as f32 / buckets as f32) - range * (1.0 / 1024.0)
+}
+
+/// A depth no smaller than any depth whose bucket is `<= k`: where the ray enters
+/// bucket `k` when it moves to smaller depths.
+#[inline]
+pub fn bucket_ceil_depth(k: u32, zmin: f32, zmax: f32, buckets: u32) -> f32 {
+    if k + 1 >= buckets {
+        return f32::INFINITY;
+    }
+    let range = zmax - zmin;
+    zmin + range * ((k + 1) as f32 / buckets as f32) + range * (1.0 / 1024.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn ends_and_clamps() {
+        assert_eq!(bucket_of(0.0, 0.0, 1.0, 8), 0);
+        assert_eq!(bucket_of(1.0, 0.0, 1.0, 8), 7);
+        assert_eq!(bucket_of(0.5, 0.0, 1.0, 8), 4);
+        assert_eq!(bucket_of(-5.0, 0.0, 1.0, 8), 0);
+        assert_eq!(bucket_of(5.0, 0.0, 1.0, 8), 7);
+        assert_eq!(bucket_of(3.0, 3.0, 3.0, 8), 0);
+        assert_eq!(bucket_range(2.0, 3.0, 0.0, 1.0, 8), None);
+        assert_eq!(bucket_range(-1.0, 0.3, 0.0, 1.0, 4), Some((0, 1)));
+    }
+
+    proptest! {
+        #[test]
+        fn monotonic_and_in_range(zmin in -1e4f32..1e4, span in 0.0f32..1e4, a in 0.0f32..1.0, b in 0.0f32..1.0, buckets in 1u32..64) {
+            let zmax = zmin + span;
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            let z0 = zmin - span * 0.1 + lo * span * 1.2;
+            let z1 = zmin - span * 0.1 + hi * span * 1.2;
+            let b0 = bucket_of(z0, zmin, zmax, buckets);
+            let b1 = bucket_of(z1, zmin, zmax, buckets);
+            prop_assert!(b0 <= b1);
+            prop_assert!(b1 < buckets);
+        }
+
+        #[test]
+        fn matches_the_formula_away_from_boundaries(zmin in -100.0f32..100.0, span in 0.01f32..100.0, f in 0.0f32..1.0, buckets in 1u32..64) {
+            let zmax = zmin + span;
+            let z = zmin + f * span;
+            let exact = ((z as f64 - zmin as f64) * buckets as f64 / (zmax as f64 - zmin as f64)).floor();
+            let frac = (z as f64 - zmin as f64) * buckets as f64 / (zmax as f64 - zmin as f64) - exact;
+            prop_assume!(frac > 1e-4 && frac < 1.0 - 1e-4);
+            let expect = (exact as i64).clamp(0, buckets as i64 - 1) as u32;
+            prop_assert_eq!(bucket_of(z, zmin, zmax, buckets), expect);
+        }
+
+        #[test]
+        fn boundary_depths_are_conservative(zmin in -100.0f32..100.0, span in 0.001f32..100.0, f in 0.0f32..1.0, buckets in 2u32..64) {
+            let zmax = zmin + span;
+            let z = zmin + f * span;
+            let k = bucket_of(z, zmin, zmax, buckets);
+            prop_assert!(bucket_floor_depth(k, zmin, zmax, buckets) <= z);
+            prop_assert!(bucket_ceil_depth(k, zmin, zmax, buckets) >= z);
+        }
+    }
+}

@@ -1,0 +1,318 @@
+//! Clipping against dilated view-space half-spaces: of a ray (to a parameter
+//! interval) and of a polygon (Sutherland–Hodgman), and the depth extent of a
+//! triangle inside one tile's frustum.
+//!
+//! Every half-space is moved outward by an absolute distance `eps` (see
+//! [`crate::view`]), so the tests are conservative: a point that is inside in
+//! exact arithmetic is inside after rounding.
+
+use crate::view::{View, ViewRay};
+
+/// A half-space of view space, tested as `f(p) >= 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HalfSpace {
+    /// `p[axis] - s·z + eps >= 0`: above the boundary of slope `s`.
+    Lo { axis: usize, s: f32 },
+    /// `s·z - p[axis] + eps >= 0`: below the boundary of slope `s`.
+    Hi { axis: usize, s: f32 },
+    /// `z - near + eps >= 0`.
+    Near(f32),
+    /// `far - z + eps >= 0`.
+    Far(f32),
+}
+
+impl HalfSpace {
+    /// Signed value at a view-space point.
+    #[inline]
+    pub fn eval(&self, p: [f32; 3], eps: f32) -> f32 {
+        match *self {
+            HalfSpace::Lo { axis, s } => p[axis] - s * p[2] + eps,
+            HalfSpace::Hi { axis, s } => s * p[2] - p[axis] + eps,
+            HalfSpace::Near(n) => p[2] - n + eps,
+            HalfSpace::Far(f) => f - p[2] + eps,
+        }
+    }
+
+    /// Linear part of `eval` along a direction.
+    #[inline]
+    pub fn slope(&self, d: [f32; 3]) -> f32 {
+        match *self {
+            HalfSpace::Lo { axis, s } => d[axis] - s * d[2],
+            HalfSpace::Hi { axis, s } => s * d[2] - d[axis],
+            HalfSpace::Near(_) => d[2],
+            HalfSpace::Far(_) => -d[2],
+        }
+    }
+}
+
+/// A ray parameter interval `[t0, t1]`; empty when `t0 > t1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    pub t0: f32,
+    pub t1: f32,
+}
+
+impl Interval {
+    pub const EMPTY: Interval = Interval { t0: f32::INFINITY, t1: f32::NEG_INFINITY };
+
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        !(self.t0 <= self.t1)
+    }
+
+    /// Intersects with the half-space; returns true when this call moved `t1`
+    /// (the ray leaves through this half-space's boundary).
+    #[inline]
+    pub fn clip(&mut self, h: &HalfSpace, vr: &ViewRay) -> bool {
+        let f0 = h.eval(vr.o, vr.eps);
+        let f1 = h.slope(vr.d);
+        if f1 > 0.0 {
+            let t = -f0 / f1;
+            if t > self.t0 {
+                self.t0 = t;
+            }
+        } else if f1 < 0.0 {
+            let t = -f0 / f1;
+            if t < self.t1 {
+                self.t1 = t;
+                return true;
+            }
+        } else if !(f0 >= 0.0) {
+            *self = Interval::EMPTY;
+        }
+        false
+    }
+}
+
+/// View-space point of the ray at `t` (no fused operations).
+#[inline]
+pub fn ray_point(vr: &ViewRay, t: f32) -> [f32; 3] {
+    [vr.o[0] + t * vr.d[0], vr.o[1] + t * vr.d[1], vr.o[2] + t * vr.d[2]]
+}
+
+/// View-space depth of the ray at `t`.
+#[inline]
+pub fn ray_depth(vr: &ViewRay, t: f32) -> f32 {
+    vr.o[2] + t * vr.d[2]
+}
+
+/// The six half-spaces of a whole view.
+pub fn view_frustum(v: &View) -> [HalfSpace; 6] {
+    [
+        HalfSpace::Lo { axis: 0, s: -v.tan },
+        HalfSpace::Hi { axis: 0, s: v.tan },
+        HalfSpace::Lo { axis: 1, s: -v.tan },
+        HalfSpace::Hi { axis: 1, s: v.tan },
+        HalfSpace::Near(v.near),
+        HalfSpace::Far(v.far),
+    ]
+}
+
+/// Side half-spaces of the block of tiles `[i0, i1) × [j0, j1)` (a tile, or a Hi-Z cell).
+pub fn block_frustum(v: &View, i0: u32, i1: u32, j0: u32, j1: u32) -> [HalfSpace; 4] {
+    [
+        HalfSpace::Lo { axis: 0, s: v.boundary(i0) },
+        HalfSpace::Hi { axis: 0, s: v.boundary(i1) },
+        HalfSpace::Lo { axis: 1, s: v.boundary(j0) },
+        HalfSpace::Hi { axis: 1, s: v.boundary(j1) },
+    ]
+}
+
+/// Clips `[tmin, tmax]` of a ray to a view's frustum. Returns the interval and
+/// the edge (`view::EDGE_*`) through which the ray leaves, if it leaves through a side.
+pub fn clip_ray_to_view(v: &View, vr: &ViewRay, tmin: f32, tmax: f32) -> (Interval, Option<usize>) {
+    let mut iv = Interval { t0: tmin, t1: tmax };
+    let mut exit = None;
+    for (k, h) in view_frustum(v).iter().enumerate() {
+        if iv.clip(h, vr) {
+            exit = if k < 4 { Some(k) } else { None };
+        }
+        if iv.is_empty() {
+            return (Interval::EMPTY, None);
+        }
+    }
+    (iv, exit)
+}
+
+/// Maximum vertices of a clipped polygon: a triangle clipped by 6 view planes
+/// and 4 tile planes gains at most one vertex per plane.
+pub const MAX_POLY: usize = 16;
+
+/// A convex polygon in view space.
+#[derive(Clone, Copy, Debug)]
+pub struct Polygon {
+    pub len: usize,
+    pub v: [[f32; 3]; MAX_POLY],
+}
+
+impl Polygon {
+    pub fn triangle(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Polygon {
+        let mut v = [[0.0; 3]; MAX_POLY];
+        v[0] = a;
+        v[1] = b;
+        v[2] = c;
+        Polygon { len: 3, v }
+    }
+
+    pub fn vertices(&self) -> &[[f32; 3]] {
+        &self.v[..self.len]
+    }
+
+    /// Sutherland–Hodgman against one half-space. Points on the boundary are kept.
+    pub fn clip(&mut self, h: &HalfSpace, eps: f32) {
+        let n = self.len;
+        if n == 0 {
+            return;
+        }
+        let mut out = [[0.0f32; 3]; MAX_POLY];
+        let mut m = 0;
+        for k in 0..n {
+            let p = self.v[k];
+            let q = self.v[(k + 1) % n];
+            let fp = h.eval(p, eps);
+            let fq = h.eval(q, eps);
+            if fp >= 0.0 && m < MAX_POLY {
+                out[m] = p;
+                m += 1;
+            }
+            if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
+                let w = fp / (fp - fq);
+                out[m] = [p[0] + (q[0] - p[0]) * w, p[1] + (q[1] - p[1]) * w, p[2] + (q[2] - p[2]) * w];
+                m += 1;
+            }
+        }
+        self.v = out;
+        self.len = m;
+    }
+
+    /// Depth range of the vertices, or `None` when empty.
+    pub fn depth_range(&self) -> Option<(f32, f32)> {
+        if self.len == 0 {
+            return None;
+        }
+        let mut lo = f32::INFINITY;
+        let mut hi = f32::NEG_INFINITY;
+        for p in self.vertices() {
+            lo = lo.min(p[2]);
+            hi = hi.max(p[2]);
+        }
+        Some((lo, hi))
+    }
+}
+
+/// A triangle in a view's space, clipped to the view's (dilated) frustum, or
+/// `None` when it is entirely outside.
+pub fn clip_triangle_to_view(v: &View, tri: [[f32; 3]; 3]) -> Option<Polygon> {
+    let mut poly = Polygon::triangle(tri[0], tri[1], tri[2]);
+    for h in &view_frustum(v) {
+        poly.clip(h, v.eps);
+        if poly.len == 0 {
+            return None;
+        }
+    }
+    Some(poly)
+}
+
+/// Depth extent of a (view-clipped) polygon inside the frustum of tile `(i, j)`,
+/// rounded outward by the view's `eps`; `None` when it does not touch the tile.
+pub fn tile_depth_extent(v: &View, poly: &Polygon, i: u32, j: u32) -> Option<(f32, f32)> {
+    let mut p = *poly;
+    for h in &block_frustum(v, i, i + 1, j, j + 1) {
+        p.clip(h, v.eps);
+        if p.len == 0 {
+            return None;
+        }
+    }
+    let (lo, hi) = p.depth_range()?;
+    Some((lo - v.eps, hi + v.eps))
+}
+
+/// Conservative range of tiles `[i0, i1] × [j0, j1]` (inclusive) a view-clipped
+/// polygon may touch.
+pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u32)> {
+    let (zlo, _) = poly.depth_range()?;
+    let z = zlo.max(v.near * 0.5);
+    // Slope error from the dilation at the smallest depth, plus rounding room.
+    let delta = v.eps / z / v.step + 1.0 / 256.0;
+    let (mut xlo, mut xhi, mut ylo, mut yhi) = (f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY);
+    for p in poly.vertices() {
+        let pz = p[2].max(v.near * 0.5);
+        let x = v.tile_coord(p[0] / pz);
+        let y = v.tile_coord(p[1] / pz);
+        xlo = xlo.min(x);
+        xhi = xhi.max(x);
+        ylo = ylo.min(y);
+        yhi = yhi.max(y);
+    }
+    let last = v.tiles as f32 - 1.0;
+    let c = |x: f32| x.floor().clamp(0.0, last) as u32;
+    if !(xhi + delta >= 0.0 && yhi + delta >= 0.0 && xlo - delta <= v.tiles as f32 && ylo - delta <= v.tiles as f32) {
+        return None;
+    }
+    Some((c(xlo - delta), c(xhi + delta), c(ylo - delta), c(yhi + delta)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::{Aabb, Ray};
+    use crate::view::ViewSet;
+    use glam::Vec3;
+    use proptest::prelude::*;
+
+    fn cube(tiles: u32) -> ViewSet {
+        ViewSet::cube(Vec3::new(0.1, 0.05, -0.07), &Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) }, tiles)
+    }
+
+    fn v3() -> impl Strategy<Value = Vec3> {
+        (-2.0f32..2.0, -2.0f32..2.0, -2.0f32..2.0).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    proptest! {
+        // Every sampled point of a triangle that lies inside a tile's frustum
+        // has a depth inside the tile extent computed by clipping.
+        #[test]
+        fn clipped_extents_contain_sampled_points(a in v3(), b in v3(), c in v3(), face in 0usize..6, tiles in 1u32..12) {
+            let vs = cube(tiles);
+            let v = &vs.views[face];
+            let tri = [v.to_view(a), v.to_view(b), v.to_view(c)];
+            let poly = clip_triangle_to_view(v, tri);
+            let n = 24;
+            for s in 0..=n {
+                for t in 0..=(n - s) {
+                    let (fs, ft) = (s as f32 / n as f32, t as f32 / n as f32);
+                    let p = a + (b - a) * fs + (c - a) * ft;
+                    let q = v.to_view(p);
+                    if !(q[2] >= v.near && q[2] <= v.far) { continue; }
+                    let (sx, sy) = (q[0] / q[2], q[1] / q[2]);
+                    if sx.abs() > 1.0 || sy.abs() > 1.0 { continue; }
+                    let i = (v.tile_coord(sx).floor() as i64).clamp(0, tiles as i64 - 1) as u32;
+                    let j = (v.tile_coord(sy).floor() as i64).clamp(0, tiles as i64 - 1) as u32;
+                    let poly = poly.expect("a point inside the view means the clipped triangle is not empty");
+                    let (i0, i1, j0, j1) = polygon_tile_range(v, &poly).expect("tile range");
+                    prop_assert!(i0 <= i && i <= i1 && j0 <= j && j <= j1);
+                    let (lo, hi) = tile_depth_extent(v, &poly, i, j).expect("the tile holding a point of the triangle has an extent");
+                    prop_assert!(lo <= q[2] && q[2] <= hi, "{} not in [{}, {}]", q[2], lo, hi);
+                }
+            }
+        }
+
+        // Points of a ray inside the view lie inside the clipped interval.
+        #[test]
+        fn ray_clip_contains_points_inside(o in v3(), d in v3(), face in 0usize..6) {
+            prop_assume!(d.length() > 1e-3);
+            let vs = cube(4);
+            let v = &vs.views[face];
+            let ray = Ray::new(o, d, 0.0, 10.0);
+            let vr = v.ray(&ray);
+            let (iv, _) = clip_ray_to_view(v, &vr, ray.tmin, ray.tmax);
+            for k in 0..=200 {
+                let t = k as f32 * 0.05;
+                let q = v.to_view(ray.at(t));
+                if q[2] >= v.near && q[2] <= v.far && q[0].abs() <= q[2] && q[1].abs() <= q[2] {
+                    prop_assert!(iv.t0 <= t && t <= iv.t1, "t={} outside [{}, {}]", t, iv.t0, iv.t1);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,329 @@
+//! Views: perspective views with a square grid of tiles, the cubemap view set
+//! of 004 §3.2 with its face adjacency, and a single-view set.
+//!
+//! View space: `x = (p - apex)·right`, `y = (p - apex)·up`, `z = (p - apex)·forward`
+//! (the depth). A view sees `|x| <= tan·z`, `|y| <= tan·z`, `near <= z <= far`.
+//! Tile `(i, j)` of a view with `tiles` tiles per side covers the slopes
+//! `x/z ∈ [s(i), s(i+1)]`, `y/z ∈ [s(j), s(j+1)]` with `s(k) = k·step − tan`,
+//! `step = 2·tan/tiles`. Row `j` grows with `+y`.
+//!
+//! Every frustum used for a decision is *dilated* by the view's `eps` (an
+//! absolute view-space distance), and every ray's by a per-ray `eps`; see
+//! [`crate::clip`]. The dilation is what makes coverage conservative in
+//! floating point.
+
+use crate::types::{Aabb, Ray};
+use glam::Vec3;
+
+/// Relative size of the conservative dilation: 2^-16 of the scale of the
+/// coordinates involved, far above the few-ulp (2^-24) rounding of each step.
+pub const EPS_REL: f32 = 1.0 / 65536.0;
+
+/// One perspective view with its tile grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    pub apex: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+    /// tan of the half field of view (1 for a cube face).
+    pub tan: f32,
+    pub near: f32,
+    pub far: f32,
+    /// Tiles per side.
+    pub tiles: u32,
+    /// Slope width of one tile: `2·tan/tiles`.
+    pub step: f32,
+    /// Absolute dilation of this view's frusta for building (view-space units).
+    pub eps: f32,
+    /// Largest |view coordinate| of the scene bounds' corners: the scale of build coordinates.
+    pub scale: f32,
+    /// False when no part of the scene bounds is in front of the near plane.
+    pub has_content: bool,
+}
+
+/// A ray expressed in one view's space, with its own dilation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewRay {
+    pub o: [f32; 3],
+    pub d: [f32; 3],
+    pub eps: f32,
+}
+
+impl View {
+    /// Builds a view and fits `near`, `far`, `eps` to `bounds`.
+    /// `near` is a lower bound; `far` is fitted to the bounds' corners.
+    pub fn new(apex: Vec3, right: Vec3, up: Vec3, forward: Vec3, tan: f32, near: f32, tiles: u32, bounds: &Aabb) -> View {
+        let mut v = View {
+            apex,
+            right,
+            up,
+            forward,
+            tan,
+            near,
+            far: near,
+            tiles,
+            step: 2.0 * tan / tiles as f32,
+            eps: 0.0,
+            scale: near,
+            has_content: false,
+        };
+        let mut far = f32::NEG_INFINITY;
+        let mut scale = near;
+        for c in corners(bounds) {
+            let p = v.to_view(c);
+            far = far.max(p[2]);
+            scale = scale.max(p[0].abs()).max(p[1].abs()).max(p[2].abs());
+        }
+        v.has_content = far > near;
+        v.scale = scale;
+        v.eps = EPS_REL * scale;
+        // Fitted far plane, pushed out a little so geometry on the box face is inside.
+        v.far = if v.has_content { far + 2.0 * v.eps } else { near };
+        v
+    }
+
+    /// World point to view space. Written out (no fused operations) so WGSL can mirror it.
+    #[inline]
+    pub fn to_view(&self, p: Vec3) -> [f32; 3] {
+        let q = [p.x - self.apex.x, p.y - self.apex.y, p.z - self.apex.z];
+        [dot3(q, self.right), dot3(q, self.up), dot3(q, self.forward)]
+    }
+
+    /// World direction to view space.
+    #[inline]
+    pub fn dir_to_view(&self, d: Vec3) -> [f32; 3] {
+        let q = d.to_array();
+        [dot3(q, self.right), dot3(q, self.up), dot3(q, self.forward)]
+    }
+
+    /// The ray in this view's space, with a dilation that covers the rounding
+    /// of its coordinates (which grow with the origin's distance from the apex).
+    #[inline]
+    pub fn ray(&self, ray: &Ray) -> ViewRay {
+        let o = self.to_view(ray.origin());
+        let d = self.dir_to_view(ray.dir());
+        let m = o[0].abs().max(o[1].abs()).max(o[2].abs());
+        ViewRay { o, d, eps: EPS_REL * (m + 2.0 * self.scale) }
+    }
+
+    /// Slope of tile boundary `k` (0..=tiles).
+    #[inline]
+    pub fn boundary(&self, k: u32) -> f32 {
+        k as f32 * self.step - self.tan
+    }
+
+    /// Continuous tile coordinate of slope `s`.
+    #[inline]
+    pub fn tile_coord(&self, s: f32) -> f32 {
+        (s + self.tan) / self.step
+    }
+
+    pub fn tile_count(&self) -> usize {
+        (self.tiles * self.tiles) as usize
+    }
+}
+
+#[inline]
+pub fn dot3(a: [f32; 3], b: Vec3) -> f32 {
+    a[0] * b.x + a[1] * b.y + a[2] * b.z
+}
+
+/// The eight corners of a box.
+pub fn corners(b: &Aabb) -> [Vec3; 8] {
+    let (l, h) = (b.min, b.max);
+    [
+        Vec3::new(l.x, l.y, l.z),
+        Vec3::new(h.x, l.y, l.z),
+        Vec3::new(l.x, h.y, l.z),
+        Vec3::new(h.x, h.y, l.z),
+        Vec3::new(l.x, l.y, h.z),
+        Vec3::new(h.x, l.y, h.z),
+        Vec3::new(l.x, h.y, h.z),
+        Vec3::new(h.x, h.y, h.z),
+    ]
+}
+
+/// Which set of views covers the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ViewsKind {
+    /// Six 90° perspective views around a centre (004 §3.2). Exact for every ray.
+    #[default]
+    Cube,
+    /// One perspective view. Exact for every ray when the whole scene is in
+    /// its frustum (the default placement); otherwise hits outside it are not found.
+    Single,
+}
+
+/// Edges of a view's image, in adjacency order.
+pub const EDGE_LEFT: usize = 0; // x = -tan·z
+pub const EDGE_RIGHT: usize = 1; // x = +tan·z
+pub const EDGE_BOTTOM: usize = 2; // y = -tan·z
+pub const EDGE_TOP: usize = 3; // y = +tan·z
+
+/// Cube faces: +X, -X, +Y, -Y, +Z, -Z (forward, right, up).
+const CUBE_AXES: [[Vec3; 3]; 6] = [
+    [Vec3::X, Vec3::NEG_Z, Vec3::Y],
+    [Vec3::NEG_X, Vec3::Z, Vec3::Y],
+    [Vec3::Y, Vec3::X, Vec3::NEG_Z],
+    [Vec3::NEG_Y, Vec3::X, Vec3::Z],
+    [Vec3::Z, Vec3::X, Vec3::Y],
+    [Vec3::NEG_Z, Vec3::NEG_X, Vec3::Y],
+];
+
+fn face_of_direction(d: Vec3) -> usize {
+    CUBE_AXES.iter().position(|a| a[0] == d).unwrap_or(0)
+}
+
+/// A set of views covering the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewSet {
+    pub kind: ViewsKind,
+    pub views: Vec<View>,
+    /// Centre of the cube, or eye of the single view.
+    pub center: Vec3,
+    /// For the cube: `adjacency[face][edge]` is the face across that edge.
+    pub adjacency: Vec<[u32; 4]>,
+}
+
+impl ViewSet {
+    /// The cubemap of 004 §3.2: six 90° views sharing `center`, each centre of
+    /// projection moved back by the near distance so the near planes pass
+    /// through `center` and the six frusta together cover all of space.
+    pub fn cube(center: Vec3, bounds: &Aabb, tiles: u32) -> ViewSet {
+        let near = near_distance(center, bounds);
+        let views = CUBE_AXES
+            .iter()
+            .map(|&[f, r, u]| View::new(center - f * near, r, u, f, 1.0, near, tiles, bounds))
+            .collect();
+        let adjacency = CUBE_AXES
+            .iter()
+            .map(|&[_, r, u]| {
+                let mut a = [0u32; 4];
+                a[EDGE_LEFT] = face_of_direction(-r) as u32;
+                a[EDGE_RIGHT] = face_of_direction(r) as u32;
+                a[EDGE_BOTTOM] = face_of_direction(-u) as u32;
+                a[EDGE_TOP] = face_of_direction(u) as u32;
+                a
+            })
+            .collect();
+        ViewSet { kind: ViewsKind::Cube, views, center, adjacency }
+    }
+
+    /// One 90° view. Without `eye` it is placed on the -Z side of the bounds,
+    /// far enough that the bounding sphere lies inside its frustum: then every
+    /// triangle is seen and tracing is exact for every ray. With `eye`, it looks
+    /// from there towards the bounds' centre; geometry outside its frustum is not seen.
+    pub fn single(eye: Option<Vec3>, bounds: &Aabb, tiles: u32) -> ViewSet {
+        let c = bounds.center();
+        let r = (bounds.extent().length() * 0.5).max(f32::MIN_POSITIVE);
+        let (apex, forward, near) = match eye {
+            None => {
+                // sin(45°) = 1/sqrt(2): distance sqrt(2)·r puts the sphere inside the cone; 1.5·r adds room.
+                let dist = 1.5 * r + r;
+                (c - Vec3::Z * dist, Vec3::Z, dist - r * 1.01)
+            }
+            Some(e) => {
+                let f = (c - e).try_normalize().unwrap_or(Vec3::Z);
+                (e, f, near_distance(e, bounds))
+            }
+        };
+        let up_hint = if forward.y.abs() > 0.9 { Vec3::X } else { Vec3::Y };
+        let right = up_hint.cross(forward).normalize();
+        let up = forward.cross(right);
+        let v = View::new(apex, right, up, forward, 1.0, near.max(f32::MIN_POSITIVE), tiles, bounds);
+        ViewSet { kind: ViewsKind::Single, views: vec![v], center: apex, adjacency: Vec::new() }
+    }
+}
+
+/// Near distance for views centred at `c`: small against the scene, large
+/// against the dilation (2^-8 of the scale, 256 times `EPS_REL`).
+fn near_distance(c: Vec3, bounds: &Aabb) -> f32 {
+    let mut scale: f32 = 0.0;
+    for p in corners(bounds) {
+        scale = scale.max((p - c).abs().max_element());
+    }
+    if !(scale > 0.0) || !scale.is_finite() {
+        scale = 1.0;
+    }
+    scale * (1.0 / 256.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box() -> Aabb {
+        Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) }
+    }
+
+    #[test]
+    fn cube_faces_are_orthonormal_and_right_handed() {
+        let vs = ViewSet::cube(Vec3::ZERO, &unit_box(), 16);
+        for v in &vs.views {
+            assert_eq!(v.right.cross(v.up), v.forward);
+            assert_eq!(v.right.dot(v.up), 0.0);
+            assert_eq!(v.forward.dot(v.up), 0.0);
+            assert!(v.has_content);
+        }
+    }
+
+    #[test]
+    fn adjacency_crosses_the_shared_edge() {
+        // The point on edge e of face f at the far plane lies on the matching edge of the neighbour.
+        let vs = ViewSet::cube(Vec3::ZERO, &unit_box(), 16);
+        for (f, v) in vs.views.iter().enumerate() {
+            for e in 0..4 {
+                let g = vs.adjacency[f][e] as usize;
+                assert_ne!(f, g);
+                let (sx, sy) = match e {
+                    EDGE_LEFT => (-1.0, 0.0),
+                    EDGE_RIGHT => (1.0, 0.0),
+                    EDGE_BOTTOM => (0.0, -1.0),
+                    _ => (0.0, 1.0),
+                };
+                let z = 3.0;
+                let p = v.apex + v.forward * z + v.right * (sx * z) + v.up * (sy * z);
+                let w = &vs.views[g];
+                let q = w.to_view(p);
+                assert!(q[2] > 0.0);
+                let (qx, qy) = (q[0] / q[2], q[1] / q[2]);
+                assert!(qx.abs() <= 1.0 + 1e-5 && qy.abs() <= 1.0 + 1e-5, "face {f} edge {e} -> {g}: {qx} {qy}");
+                // The neighbour's neighbour across some edge is f again.
+                assert!(vs.adjacency[g].contains(&(f as u32)));
+            }
+        }
+    }
+
+    #[test]
+    fn shifted_cube_covers_all_space() {
+        let vs = ViewSet::cube(Vec3::new(0.1, -0.2, 0.3), &unit_box(), 16);
+        let mut s = 0x1234_5678u32;
+        for _ in 0..10_000 {
+            let mut r = || {
+                s ^= s << 13;
+                s ^= s >> 17;
+                s ^= s << 5;
+                (s as f32 / u32::MAX as f32) * 2.0 - 1.0
+            };
+            let p = Vec3::new(r(), r(), r()) * 1.5;
+            let inside = vs.views.iter().any(|v| {
+                let q = v.to_view(p);
+                q[2] >= v.near && q[0].abs() <= q[2] && q[1].abs() <= q[2]
+            });
+            assert!(inside, "{p} is in no face");
+        }
+    }
+
+    #[test]
+    fn default_single_view_sees_the_whole_bounds() {
+        let b = Aabb { min: Vec3::new(-3.0, 0.0, 2.0), max: Vec3::new(5.0, 1.0, 9.0) };
+        let vs = ViewSet::single(None, &b, 8);
+        let v = &vs.views[0];
+        for c in corners(&b) {
+            let q = v.to_view(c);
+            assert!(q[2] > v.near && q[2] < v.far);
+            assert!(q[0].abs() < q[2] && q[1].abs() < q[2]);
+        }
+    }
+}
