@@ -20,7 +20,13 @@ pub fn bucket_of(z: f32, zmin: f32, zmax: f32, buckets: u32) -> u32 {
     }
     let last = buckets - 1;
     let est = x / range;
-    let mut k = if est >= last as f32 { last } else if est >= 0.0 { est as u32 } else { 0 };
+    let mut k = if est >= last as f32 {
+        last
+    } else if est >= 0.0 {
+        est as u32
+    } else {
+        0
+    };
     while k > 0 && k as f32 * range > x {
         k -= 1;
     }
@@ -37,7 +43,10 @@ pub fn bucket_range(z0: f32, z1: f32, zmin: f32, zmax: f32, buckets: u32) -> Opt
     if !(z1 >= zmin && z0 <= zmax) {
         return None;
     }
-    Some((bucket_of(z0, zmin, zmax, buckets), bucket_of(z1, zmin, zmax, buckets)))
+    Some((
+        bucket_of(z0, zmin, zmax, buckets),
+        bucket_of(z1, zmin, zmax, buckets),
+    ))
 }
 
 /// A depth no larger than any depth whose bucket is `>= k`: where the ray enters

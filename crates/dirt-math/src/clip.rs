@@ -53,7 +53,10 @@ pub struct Interval {
 }
 
 impl Interval {
-    pub const EMPTY: Interval = Interval { t0: f32::INFINITY, t1: f32::NEG_INFINITY };
+    pub const EMPTY: Interval = Interval {
+        t0: f32::INFINITY,
+        t1: f32::NEG_INFINITY,
+    };
 
     #[inline]
     pub fn is_empty(&self) -> bool {
@@ -87,7 +90,11 @@ impl Interval {
 /// View-space point of the ray at `t` (no fused operations).
 #[inline]
 pub fn ray_point(vr: &ViewRay, t: f32) -> [f32; 3] {
-    [vr.o[0] + t * vr.d[0], vr.o[1] + t * vr.d[1], vr.o[2] + t * vr.d[2]]
+    [
+        vr.o[0] + t * vr.d[0],
+        vr.o[1] + t * vr.d[1],
+        vr.o[2] + t * vr.d[2],
+    ]
 }
 
 /// View-space depth of the ray at `t`.
@@ -111,10 +118,22 @@ pub fn view_frustum(v: &View) -> [HalfSpace; 6] {
 /// Side half-spaces of the block of tiles `[i0, i1) × [j0, j1)` (a tile, or a Hi-Z cell).
 pub fn block_frustum(v: &View, i0: u32, i1: u32, j0: u32, j1: u32) -> [HalfSpace; 4] {
     [
-        HalfSpace::Lo { axis: 0, s: v.boundary(i0) },
-        HalfSpace::Hi { axis: 0, s: v.boundary(i1) },
-        HalfSpace::Lo { axis: 1, s: v.boundary(j0) },
-        HalfSpace::Hi { axis: 1, s: v.boundary(j1) },
+        HalfSpace::Lo {
+            axis: 0,
+            s: v.boundary(i0),
+        },
+        HalfSpace::Hi {
+            axis: 0,
+            s: v.boundary(i1),
+        },
+        HalfSpace::Lo {
+            axis: 1,
+            s: v.boundary(j0),
+        },
+        HalfSpace::Hi {
+            axis: 1,
+            s: v.boundary(j1),
+        },
     ]
 }
 
@@ -177,7 +196,11 @@ impl Polygon {
             }
             if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
                 let w = fp / (fp - fq);
-                out[m] = [p[0] + (q[0] - p[0]) * w, p[1] + (q[1] - p[1]) * w, p[2] + (q[2] - p[2]) * w];
+                out[m] = [
+                    p[0] + (q[0] - p[0]) * w,
+                    p[1] + (q[1] - p[1]) * w,
+                    p[2] + (q[2] - p[2]) * w,
+                ];
                 m += 1;
             }
         }
@@ -234,7 +257,12 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
     let z = zlo.max(v.near * 0.5);
     // Slope error from the dilation at the smallest depth, plus rounding room.
     let delta = v.eps / z / v.step + 1.0 / 256.0;
-    let (mut xlo, mut xhi, mut ylo, mut yhi) = (f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY);
+    let (mut xlo, mut xhi, mut ylo, mut yhi) = (
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    );
     for p in poly.vertices() {
         let pz = p[2].max(v.near * 0.5);
         let x = v.tile_coord(p[0] / pz);
@@ -246,10 +274,38 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
     }
     let last = v.tiles as f32 - 1.0;
     let c = |x: f32| x.floor().clamp(0.0, last) as u32;
-    if !(xhi + delta >= 0.0 && yhi + delta >= 0.0 && xlo - delta <= v.tiles as f32 && ylo - delta <= v.tiles as f32) {
+    if !(xhi + delta >= 0.0
+        && yhi + delta >= 0.0
+        && xlo - delta <= v.tiles as f32
+        && ylo - delta <= v.tiles as f32)
+    {
         return None;
     }
-    Some((c(xlo - delta), c(xhi + delta), c(ylo - delta), c(yhi + delta)))
+    Some((
+        c(xlo - delta),
+        c(xhi + delta),
+        c(ylo - delta),
+        c(yhi + delta),
+    ))
+}
+
+/// Calls `f(i, j, zlo, zhi)` for every tile of `v` whose dilated frustum the
+/// triangle (in view space) touches, with its conservative depth extent there.
+/// This is the coverage rule shared by `fill_depth` and `fill_primitives`.
+pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32, u32, f32, f32)) {
+    let Some(poly) = clip_triangle_to_view(v, tri) else {
+        return;
+    };
+    let Some((i0, i1, j0, j1)) = polygon_tile_range(v, &poly) else {
+        return;
+    };
+    for j in j0..=j1 {
+        for i in i0..=i1 {
+            if let Some((lo, hi)) = tile_depth_extent(v, &poly, i, j) {
+                f(i, j, lo, hi);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -261,7 +317,14 @@ mod tests {
     use proptest::prelude::*;
 
     fn cube(tiles: u32) -> ViewSet {
-        ViewSet::cube(Vec3::new(0.1, 0.05, -0.07), &Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) }, tiles)
+        ViewSet::cube(
+            Vec3::new(0.1, 0.05, -0.07),
+            &Aabb {
+                min: Vec3::splat(-2.0),
+                max: Vec3::splat(2.0),
+            },
+            tiles,
+        )
     }
 
     fn v3() -> impl Strategy<Value = Vec3> {

@@ -56,7 +56,10 @@ fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
         return None;
     }
     let last = (tiles - 1) as f32;
-    Some((lo.floor().clamp(0.0, last) as u32, hi.floor().clamp(0.0, last) as u32))
+    Some((
+        lo.floor().clamp(0.0, last) as u32,
+        hi.floor().clamp(0.0, last) as u32,
+    ))
 }
 
 /// Calls `visit` for every tile of `v` the ray crosses within `iv` (already
@@ -64,23 +67,47 @@ fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
 /// [`Walk::Stop`] to end the walk. `bound` is consulted before each band: when
 /// the band is entered after `bound()`, the walk ends (the termination rule:
 /// no later tile can hold a closer hit).
-pub fn walk_tiles(v: &View, vr: &ViewRay, iv: Interval, bound: &mut dyn FnMut() -> f32, visit: &mut dyn FnMut(TileSpan) -> Walk) {
+pub fn walk_tiles(
+    v: &View,
+    vr: &ViewRay,
+    iv: Interval,
+    bound: &mut dyn FnMut() -> f32,
+    visit: &mut dyn FnMut(TileSpan) -> Walk,
+) {
     if iv.is_empty() || v.tiles == 0 {
         return;
     }
     let a = tile_xy(v, vr, iv.t0);
     let b = tile_xy(v, vr, iv.t1);
     let delta = dilation(v, vr, &iv);
-    let major = if (b[0] - a[0]).abs() >= (b[1] - a[1]).abs() { 0 } else { 1 };
+    let major = if (b[0] - a[0]).abs() >= (b[1] - a[1]).abs() {
+        0
+    } else {
+        1
+    };
     let minor = 1 - major;
-    let Some((k0, k1)) = index_range(a[major], b[major], delta, v.tiles) else { return };
+    let Some((k0, k1)) = index_range(a[major], b[major], delta, v.tiles) else {
+        return;
+    };
     let forward = b[major] >= a[major];
     let minor_forward = b[minor] >= a[minor];
     for n in 0..=(k1 - k0) {
         let k = if forward { k0 + n } else { k1 - n };
         let mut band = iv;
-        band.clip(&HalfSpace::Lo { axis: major, s: v.boundary(k) }, vr);
-        band.clip(&HalfSpace::Hi { axis: major, s: v.boundary(k + 1) }, vr);
+        band.clip(
+            &HalfSpace::Lo {
+                axis: major,
+                s: v.boundary(k),
+            },
+            vr,
+        );
+        band.clip(
+            &HalfSpace::Hi {
+                axis: major,
+                s: v.boundary(k + 1),
+            },
+            vr,
+        );
         if band.is_empty() {
             continue;
         }
@@ -89,12 +116,26 @@ pub fn walk_tiles(v: &View, vr: &ViewRay, iv: Interval, bound: &mut dyn FnMut() 
         }
         let p = tile_xy(v, vr, band.t0);
         let q = tile_xy(v, vr, band.t1);
-        let Some((m0, m1)) = index_range(p[minor], q[minor], delta, v.tiles) else { continue };
+        let Some((m0, m1)) = index_range(p[minor], q[minor], delta, v.tiles) else {
+            continue;
+        };
         for e in 0..=(m1 - m0) {
             let m = if minor_forward { m0 + e } else { m1 - e };
             let mut span = band;
-            span.clip(&HalfSpace::Lo { axis: minor, s: v.boundary(m) }, vr);
-            span.clip(&HalfSpace::Hi { axis: minor, s: v.boundary(m + 1) }, vr);
+            span.clip(
+                &HalfSpace::Lo {
+                    axis: minor,
+                    s: v.boundary(m),
+                },
+                vr,
+            );
+            span.clip(
+                &HalfSpace::Hi {
+                    axis: minor,
+                    s: v.boundary(m + 1),
+                },
+                vr,
+            );
             if span.is_empty() {
                 continue;
             }
@@ -216,7 +257,11 @@ mod tests {
         let (_, spans) = walk(v, ray);
         let mut seen: HashMap<(u32, u32), Interval> = HashMap::new();
         for s in &spans {
-            prop_assert!(seen.insert((s.i, s.j), s.iv).is_none(), "tile {:?} yielded twice", (s.i, s.j));
+            prop_assert!(
+                seen.insert((s.i, s.j), s.iv).is_none(),
+                "tile {:?} yielded twice",
+                (s.i, s.j)
+            );
         }
         let n = 4000;
         for k in 0..=n {
@@ -225,7 +270,13 @@ mod tests {
                 let iv = seen.get(&tile);
                 prop_assert!(iv.is_some(), "tile {:?} of t={} not visited", tile, t);
                 let iv = iv.copied().unwrap_or(Interval::EMPTY);
-                prop_assert!(iv.t0 <= t && t <= iv.t1, "t={} outside the tile's span [{}, {}]", t, iv.t0, iv.t1);
+                prop_assert!(
+                    iv.t0 <= t && t <= iv.t1,
+                    "t={} outside the tile's span [{}, {}]",
+                    t,
+                    iv.t0,
+                    iv.t1
+                );
             }
         }
         Ok(())

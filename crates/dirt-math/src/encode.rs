@@ -6,13 +6,21 @@
 #[inline]
 pub fn f32_to_ordered(f: f32) -> u32 {
     let b = f.to_bits();
-    if b & 0x8000_0000 != 0 { !b } else { b | 0x8000_0000 }
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
 }
 
 /// Inverse of [`f32_to_ordered`].
 #[inline]
 pub fn ordered_to_f32(u: u32) -> f32 {
-    let b = if u & 0x8000_0000 != 0 { u & 0x7fff_ffff } else { !u };
+    let b = if u & 0x8000_0000 != 0 {
+        u & 0x7fff_ffff
+    } else {
+        !u
+    };
     f32::from_bits(b)
 }
 
@@ -35,7 +43,9 @@ mod tests {
     }
 
     fn finite() -> impl Strategy<Value = f32> {
-        any::<u32>().prop_map(f32::from_bits).prop_filter("finite", |f| f.is_finite())
+        any::<u32>()
+            .prop_map(f32::from_bits)
+            .prop_filter("finite", |f| f.is_finite())
     }
 
     proptest! {

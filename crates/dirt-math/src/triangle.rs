@@ -42,7 +42,14 @@ impl RayShear {
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        Self { kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] }
+        Self {
+            kx,
+            ky,
+            kz,
+            sx: d[kx] / d[kz],
+            sy: d[ky] / d[kz],
+            sz: 1.0 / d[kz],
+        }
     }
 }
 
@@ -110,20 +117,31 @@ mod tests {
 
     #[test]
     fn hits_centre_and_reports_barycentrics() {
-        let tri = Triangle::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0));
+        let tri = Triangle::new(
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(0.0, 1.0, 1.0),
+        );
         let r = ray(Vec3::new(0.25, 0.25, 0.0), Vec3::Z);
         let (t, u, v) = intersect(&r, &RayShear::new(&r), &tri).expect("hit");
         assert_eq!(t, 1.0);
         assert!((u - 0.25).abs() < 1e-6 && (v - 0.25).abs() < 1e-6);
         let back = ray(Vec3::new(0.25, 0.25, 2.0), -Vec3::Z);
-        assert_eq!(intersect(&back, &RayShear::new(&back), &tri).map(|h| h.0), Some(1.0));
+        assert_eq!(
+            intersect(&back, &RayShear::new(&back), &tri).map(|h| h.0),
+            Some(1.0)
+        );
         let miss = ray(Vec3::new(0.75, 0.75, 0.0), Vec3::Z);
         assert!(intersect(&miss, &RayShear::new(&miss), &tri).is_none());
     }
 
     #[test]
     fn respects_the_parameter_range() {
-        let tri = Triangle::new(Vec3::new(-1.0, -1.0, 2.0), Vec3::new(1.0, -1.0, 2.0), Vec3::new(0.0, 1.0, 2.0));
+        let tri = Triangle::new(
+            Vec3::new(-1.0, -1.0, 2.0),
+            Vec3::new(1.0, -1.0, 2.0),
+            Vec3::new(0.0, 1.0, 2.0),
+        );
         let mut r = ray(Vec3::ZERO, Vec3::Z);
         r.tmax = 1.5;
         assert!(intersect(&r, &RayShear::new(&r), &tri).is_none());
@@ -145,14 +163,21 @@ mod tests {
         for tri in &tris {
             for d in [Vec3::Z, Vec3::new(0.3, 0.1, 1.0), Vec3::X] {
                 let r = ray(Vec3::new(0.5, 0.0, 0.0), d);
-                assert!(intersect(&r, &RayShear::new(&r), tri).is_none(), "{tri:?} {d}");
+                assert!(
+                    intersect(&r, &RayShear::new(&r), tri).is_none(),
+                    "{tri:?} {d}"
+                );
             }
         }
     }
 
     #[test]
     fn tie_break_prefers_smaller_id() {
-        let tri = Triangle::new(Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(0.0, 1.0, 1.0));
+        let tri = Triangle::new(
+            Vec3::new(-1.0, -1.0, 1.0),
+            Vec3::new(1.0, -1.0, 1.0),
+            Vec3::new(0.0, 1.0, 1.0),
+        );
         let r = ray(Vec3::ZERO, Vec3::Z);
         let sh = RayShear::new(&r);
         let mut best = Hit::MISS;

@@ -20,7 +20,12 @@ pub struct Ray {
 
 impl Ray {
     pub fn new(origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Self {
-        Self { origin: origin.to_array(), tmin, dir: dir.to_array(), tmax }
+        Self {
+            origin: origin.to_array(),
+            tmin,
+            dir: dir.to_array(),
+            tmax,
+        }
     }
     pub fn origin(&self) -> Vec3 {
         Vec3::from_array(self.origin)
@@ -92,7 +97,12 @@ pub struct Hit {
 }
 
 impl Hit {
-    pub const MISS: Hit = Hit { prim: INVALID_ID, t: f32::INFINITY, u: 0.0, v: 0.0 };
+    pub const MISS: Hit = Hit {
+        prim: INVALID_ID,
+        t: f32::INFINITY,
+        u: 0.0,
+        v: 0.0,
+    };
 
     pub fn is_hit(&self) -> bool {
         self.prim != INVALID_ID
@@ -107,7 +117,12 @@ impl Hit {
 
     /// Bitwise equality (`t`, `u`, `v` compared as bits).
     pub fn bits(&self) -> [u32; 4] {
-        [self.prim, self.t.to_bits(), self.u.to_bits(), self.v.to_bits()]
+        [
+            self.prim,
+            self.t.to_bits(),
+            self.u.to_bits(),
+            self.v.to_bits(),
+        ]
     }
 }
 
@@ -128,7 +143,9 @@ pub struct Triangle {
 
 impl Triangle {
     pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Self {
-        Self { v: [a.to_array(), b.to_array(), c.to_array()] }
+        Self {
+            v: [a.to_array(), b.to_array(), c.to_array()],
+        }
     }
     pub fn vertex(&self, i: usize) -> Vec3 {
         Vec3::from_array(self.v[i])
@@ -146,7 +163,10 @@ pub struct Aabb {
 }
 
 impl Aabb {
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
 
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z

@@ -53,7 +53,16 @@ pub struct ViewRay {
 impl View {
     /// Builds a view and fits `near`, `far`, `eps` to `bounds`.
     /// `near` is a lower bound; `far` is fitted to the bounds' corners.
-    pub fn new(apex: Vec3, right: Vec3, up: Vec3, forward: Vec3, tan: f32, near: f32, tiles: u32, bounds: &Aabb) -> View {
+    pub fn new(
+        apex: Vec3,
+        right: Vec3,
+        up: Vec3,
+        forward: Vec3,
+        tan: f32,
+        near: f32,
+        tiles: u32,
+        bounds: &Aabb,
+    ) -> View {
         let mut v = View {
             apex,
             right,
@@ -79,7 +88,11 @@ impl View {
         v.scale = scale;
         v.eps = EPS_REL * scale;
         // Fitted far plane, pushed out a little so geometry on the box face is inside.
-        v.far = if v.has_content { far + 2.0 * v.eps } else { near };
+        v.far = if v.has_content {
+            far + 2.0 * v.eps
+        } else {
+            near
+        };
         v
     }
 
@@ -104,7 +117,11 @@ impl View {
         let o = self.to_view(ray.origin());
         let d = self.dir_to_view(ray.dir());
         let m = o[0].abs().max(o[1].abs()).max(o[2].abs());
-        ViewRay { o, d, eps: EPS_REL * (m + 2.0 * self.scale) }
+        ViewRay {
+            o,
+            d,
+            eps: EPS_REL * (m + 2.0 * self.scale),
+        }
     }
 
     /// Slope of tile boundary `k` (0..=tiles).
@@ -207,7 +224,12 @@ impl ViewSet {
                 a
             })
             .collect();
-        ViewSet { kind: ViewsKind::Cube, views, center, adjacency }
+        ViewSet {
+            kind: ViewsKind::Cube,
+            views,
+            center,
+            adjacency,
+        }
     }
 
     /// One 90° view. Without `eye` it is placed on the -Z side of the bounds,
@@ -228,11 +250,29 @@ impl ViewSet {
                 (e, f, near_distance(e, bounds))
             }
         };
-        let up_hint = if forward.y.abs() > 0.9 { Vec3::X } else { Vec3::Y };
+        let up_hint = if forward.y.abs() > 0.9 {
+            Vec3::X
+        } else {
+            Vec3::Y
+        };
         let right = up_hint.cross(forward).normalize();
         let up = forward.cross(right);
-        let v = View::new(apex, right, up, forward, 1.0, near.max(f32::MIN_POSITIVE), tiles, bounds);
-        ViewSet { kind: ViewsKind::Single, views: vec![v], center: apex, adjacency: Vec::new() }
+        let v = View::new(
+            apex,
+            right,
+            up,
+            forward,
+            1.0,
+            near.max(f32::MIN_POSITIVE),
+            tiles,
+            bounds,
+        );
+        ViewSet {
+            kind: ViewsKind::Single,
+            views: vec![v],
+            center: apex,
+            adjacency: Vec::new(),
+        }
     }
 }
 
@@ -254,7 +294,10 @@ mod tests {
     use super::*;
 
     fn unit_box() -> Aabb {
-        Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) }
+        Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        }
     }
 
     #[test]
@@ -288,7 +331,10 @@ mod tests {
                 let q = w.to_view(p);
                 assert!(q[2] > 0.0);
                 let (qx, qy) = (q[0] / q[2], q[1] / q[2]);
-                assert!(qx.abs() <= 1.0 + 1e-5 && qy.abs() <= 1.0 + 1e-5, "face {f} edge {e} -> {g}: {qx} {qy}");
+                assert!(
+                    qx.abs() <= 1.0 + 1e-5 && qy.abs() <= 1.0 + 1e-5,
+                    "face {f} edge {e} -> {g}: {qx} {qy}"
+                );
                 // The neighbour's neighbour across some edge is f again.
                 assert!(vs.adjacency[g].contains(&(f as u32)));
             }
@@ -317,7 +363,10 @@ mod tests {
 
     #[test]
     fn default_single_view_sees_the_whole_bounds() {
-        let b = Aabb { min: Vec3::new(-3.0, 0.0, 2.0), max: Vec3::new(5.0, 1.0, 9.0) };
+        let b = Aabb {
+            min: Vec3::new(-3.0, 0.0, 2.0),
+            max: Vec3::new(5.0, 1.0, 9.0),
+        };
         let vs = ViewSet::single(None, &b, 8);
         let v = &vs.views[0];
         for c in corners(&b) {

@@ -1,0 +1,94 @@
+//! Exactness of `trace` against `brute_force` on random triangle soups.
+
+use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind, brute_force, trace_with_stats};
+use dirt_math::{Ray, Triangle, Vec3};
+
+struct Rng(u64);
+impl Rng {
+    fn f(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn v(&mut self, s: f32) -> Vec3 {
+        Vec3::new(
+            self.f() * 2.0 - 1.0,
+            self.f() * 2.0 - 1.0,
+            self.f() * 2.0 - 1.0,
+        ) * s
+    }
+}
+
+fn soup(n: usize, rng: &mut Rng) -> Vec<Triangle> {
+    (0..n)
+        .map(|_| {
+            let c = rng.v(1.0);
+            Triangle::new(c + rng.v(0.2), c + rng.v(0.2), c + rng.v(0.2))
+        })
+        .collect()
+}
+
+fn rays(n: usize, tris: &[Triangle], rng: &mut Rng) -> Vec<Ray> {
+    (0..n)
+        .map(|k| {
+            let o = rng.v(if k % 2 == 0 { 0.9 } else { 3.0 });
+            let target = match k % 4 {
+                0 => rng.v(1.0),
+                1 => tris[k % tris.len()].vertex(k % 3),
+                2 => {
+                    let t = tris[k % tris.len()];
+                    (t.vertex(0) + t.vertex(1)) * 0.5
+                }
+                _ => o + [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X][k % 4],
+            };
+            Ray::new(o, target - o, 0.0, f32::INFINITY)
+        })
+        .collect()
+}
+
+#[test]
+fn random_soup_matches_brute_force() {
+    let mut rng = Rng(7);
+    let tris = soup(400, &mut rng);
+    let rs = rays(4000, &tris, &mut rng);
+    let truth = brute_force::trace(&tris, &rs);
+    assert!(truth.iter().filter(|h| h.is_hit()).count() > 1000);
+    for views in [ViewsKind::Cube, ViewsKind::Single] {
+        for (res, tile) in [(32, 1), (64, 2), (64, 4)] {
+            for buckets in [1, 8, 32] {
+                let ads = Ads::build(
+                    &tris,
+                    &AdsParams {
+                        views,
+                        resolution: res,
+                        buckets,
+                        tile,
+                        center: None,
+                    },
+                )
+                .expect("build");
+                for trav in [Traversal::Linear, Traversal::HiZ] {
+                    let (hits, stats) = trace_with_stats(&ads, &tris, &rs, trav);
+                    let bad: Vec<usize> = (0..rs.len())
+                        .filter(|&i| hits[i].bits() != truth[i].bits())
+                        .collect();
+                    let tests: u64 = stats.iter().map(|s| s.tests as u64).sum();
+                    assert!(
+                        bad.is_empty(),
+                        "{views:?} res {res} S {tile} B {buckets} {trav:?}: {} mismatches, first ray {:?}: {:?} vs {:?}",
+                        bad.len(),
+                        rs[bad[0]],
+                        hits[bad[0]],
+                        truth[bad[0]]
+                    );
+                    eprintln!(
+                        "{views:?} res {res} S {tile} B {buckets} {trav:?}: {:.1} tests/ray",
+                        tests as f64 / rs.len() as f64
+                    );
+                }
+            }
+        }
+    }
+}
