@@ -78,7 +78,7 @@ impl AdsParams {
                 self.resolution
             ));
         }
-        if self.tile == 0 || self.resolution % self.tile != 0 {
+        if self.tile == 0 || !self.resolution.is_multiple_of(self.tile) {
             return bad(format!(
                 "tile size {} must be >= 1 and divide the resolution {}",
                 self.tile, self.resolution
@@ -87,10 +87,10 @@ impl AdsParams {
         if self.buckets == 0 || self.buckets > 4096 {
             return bad(format!("buckets must be in 1..=4096, got {}", self.buckets));
         }
-        if let Some(c) = self.center {
-            if !c.is_finite() {
-                return bad(format!("center must be finite, got {c}"));
-            }
+        if let Some(c) = self.center
+            && !c.is_finite()
+        {
+            return bad(format!("center must be finite, got {c}"));
         }
         let lists = 6u64 * (self.tiles() as u64).pow(2) * self.buckets as u64;
         if lists >= u32::MAX as u64 {
