@@ -19,6 +19,13 @@ use glam::Vec3;
 /// coordinates involved, far above the few-ulp (2^-24) rounding of each step.
 pub const EPS_REL: f32 = 1.0 / 65536.0;
 
+/// Relative size of a ray's dilation: 2^-12 of the scale of its coordinates.
+/// Larger than the build's, because it must also cover how far a reported hit
+/// point may lie from its triangle (`2^-15 · max|vertex − origin|`, see
+/// `triangle::intersect`): that is at most `2^-14 · (|origin| + scale)` in view
+/// space, a quarter of this dilation.
+pub const EPS_RAY_REL: f32 = 1.0 / 4096.0;
+
 /// One perspective view with its tile grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
