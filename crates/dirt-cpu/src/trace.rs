@@ -15,6 +15,7 @@ use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
 use dirt_math::clip::{Interval, clip_ray_to_view, ray_depth};
 use dirt_math::dda::{HiZCell, Walk, child_order, projected_direction, walk_tiles};
 use dirt_math::encode::ordered_to_f32;
+use dirt_math::num::{fmax, fmin};
 use dirt_math::triangle::{RayShear, intersect_closest};
 use dirt_math::{Hit, Ray, Triangle, View, ViewRay};
 use rayon::prelude::*;
@@ -169,7 +170,7 @@ fn hiz(ctx: &Ctx<'_>, view: usize, v: &View, vr: &ViewRay, iv: Interval) {
 fn depth_span(vr: &ViewRay, iv: Interval) -> (f32, f32) {
     let za = ray_depth(vr, iv.t0);
     let zb = ray_depth(vr, iv.t1);
-    (za.min(zb) - vr.eps, za.max(zb) + vr.eps)
+    (fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps)
 }
 
 fn visit_tile(ctx: &Ctx<'_>, view: usize, v: &View, vr: &ViewRay, i: u32, j: u32, iv: Interval) {

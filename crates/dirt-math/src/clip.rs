@@ -6,6 +6,7 @@
 //! [`crate::view`]), so the tests are conservative: a point that is inside in
 //! exact arithmetic is inside after rounding.
 
+use crate::num::{floor_index, fmax, fmin};
 use crate::view::{View, ViewRay};
 
 /// A half-space of view space, tested as `f(p) >= 0`.
@@ -216,8 +217,8 @@ impl Polygon {
         let mut lo = f32::INFINITY;
         let mut hi = f32::NEG_INFINITY;
         for p in self.vertices() {
-            lo = lo.min(p[2]);
-            hi = hi.max(p[2]);
+            lo = fmin(lo, p[2]);
+            hi = fmax(hi, p[2]);
         }
         Some((lo, hi))
     }
@@ -254,7 +255,7 @@ pub fn tile_depth_extent(v: &View, poly: &Polygon, i: u32, j: u32) -> Option<(f3
 /// polygon may touch.
 pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u32)> {
     let (zlo, _) = poly.depth_range()?;
-    let z = zlo.max(v.near * 0.5);
+    let z = fmax(zlo, v.near * 0.5);
     // Slope error from the dilation at the smallest depth, plus rounding room.
     let delta = v.eps / z / v.step + 1.0 / 256.0;
     let (mut xlo, mut xhi, mut ylo, mut yhi) = (
@@ -264,16 +265,15 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
         f32::NEG_INFINITY,
     );
     for p in poly.vertices() {
-        let pz = p[2].max(v.near * 0.5);
+        let pz = fmax(p[2], v.near * 0.5);
         let x = v.tile_coord(p[0] / pz);
         let y = v.tile_coord(p[1] / pz);
-        xlo = xlo.min(x);
-        xhi = xhi.max(x);
-        ylo = ylo.min(y);
-        yhi = yhi.max(y);
+        xlo = fmin(xlo, x);
+        xhi = fmax(xhi, x);
+        ylo = fmin(ylo, y);
+        yhi = fmax(yhi, y);
     }
-    let last = v.tiles as f32 - 1.0;
-    let c = |x: f32| x.floor().clamp(0.0, last) as u32;
+    let last = v.tiles - 1;
     if !(xhi + delta >= 0.0
         && yhi + delta >= 0.0
         && xlo - delta <= v.tiles as f32
@@ -282,10 +282,10 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
         return None;
     }
     Some((
-        c(xlo - delta),
-        c(xhi + delta),
-        c(ylo - delta),
-        c(yhi + delta),
+        floor_index(xlo - delta, last),
+        floor_index(xhi + delta, last),
+        floor_index(ylo - delta, last),
+        floor_index(yhi + delta, last),
     ))
 }
 

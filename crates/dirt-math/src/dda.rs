@@ -12,6 +12,7 @@
 //! front-to-back order of a cell's four children.
 
 use crate::clip::{HalfSpace, Interval, ray_point};
+use crate::num::{floor_index, fmax, fmin};
 use crate::view::{View, ViewRay};
 
 /// A tile with the ray's interval inside its dilated frustum.
@@ -33,7 +34,7 @@ pub enum Walk {
 #[inline]
 fn tile_xy(v: &View, vr: &ViewRay, t: f32) -> [f32; 2] {
     let p = ray_point(vr, t);
-    let z = p[2].max(v.near * 0.5);
+    let z = fmax(p[2], v.near * 0.5);
     [v.tile_coord(p[0] / z), v.tile_coord(p[1] / z)]
 }
 
@@ -43,23 +44,20 @@ fn tile_xy(v: &View, vr: &ViewRay, t: f32) -> [f32; 2] {
 fn dilation(v: &View, vr: &ViewRay, iv: &Interval) -> f32 {
     let z0 = vr.o[2] + iv.t0 * vr.d[2];
     let z1 = vr.o[2] + iv.t1 * vr.d[2];
-    let z = (z0.min(z1) - vr.eps).max(v.near * 0.5);
+    let z = fmax(fmin(z0, z1) - vr.eps, v.near * 0.5);
     vr.eps / z / v.step + 1.0 / 256.0
 }
 
 /// Inclusive tile index range of the continuous coordinates `a`, `b`, dilated by `d`.
 #[inline]
 fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
-    let lo = a.min(b) - d;
-    let hi = a.max(b) + d;
+    let lo = fmin(a, b) - d;
+    let hi = fmax(a, b) + d;
     if !(hi >= 0.0 && lo < tiles as f32) {
         return None;
     }
-    let last = (tiles - 1) as f32;
-    Some((
-        lo.floor().clamp(0.0, last) as u32,
-        hi.floor().clamp(0.0, last) as u32,
-    ))
+    let last = tiles - 1;
+    Some((floor_index(lo, last), floor_index(hi, last)))
 }
 
 /// Calls `visit` for every tile of `v` the ray crosses within `iv` (already

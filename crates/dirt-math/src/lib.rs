@@ -13,6 +13,7 @@ pub mod bucket;
 pub mod clip;
 pub mod dda;
 pub mod encode;
+pub mod num;
 pub mod triangle;
 pub mod types;
 pub mod view;

@@ -9,6 +9,7 @@
 //! share it: an edge function that is exactly zero counts as inside, so no ray
 //! leaks between neighbours. Ties between triangles are broken by [`Hit::closer_than`].
 
+use crate::num::fmax;
 use crate::types::{Hit, Ray, Triangle};
 
 /// Per-ray constants of the test: the axis permutation and the shear.
@@ -148,8 +149,8 @@ pub fn intersect(ray: &Ray, sh: &RayShear, tri: &Triangle) -> Option<(f32, f32, 
     let mut size: f32 = 0.0;
     for k in 0..3 {
         let y = a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]);
-        err = err.max((t * d[k] - y).abs());
-        size = size.max(a[k].abs()).max(b[k].abs()).max(c[k].abs());
+        err = fmax(err, (t * d[k] - y).abs());
+        size = fmax(fmax(fmax(size, a[k].abs()), b[k].abs()), c[k].abs());
     }
     if !(err <= size * (1.0 / 32768.0)) {
         return None;

@@ -12,6 +12,7 @@
 //! [`crate::clip`]. The dilation is what makes coverage conservative in
 //! floating point.
 
+use crate::num::fmax;
 use crate::types::{Aabb, Ray};
 use glam::Vec3;
 
@@ -123,7 +124,7 @@ impl View {
     pub fn ray(&self, ray: &Ray) -> ViewRay {
         let o = self.to_view(ray.origin());
         let d = self.dir_to_view(ray.dir());
-        let m = o[0].abs().max(o[1].abs()).max(o[2].abs());
+        let m = fmax(fmax(o[0].abs(), o[1].abs()), o[2].abs());
         ViewRay {
             o,
             d,
