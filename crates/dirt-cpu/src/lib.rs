@@ -17,6 +17,7 @@ pub mod mip_depth;
 pub mod trace;
 
 pub use dirt_math::ViewsKind;
+pub use dirt_math::types::RayStats;
 pub use fill_primitives::IdLists;
 pub use trace::{trace, trace_with_stats};
 
@@ -113,19 +114,6 @@ pub enum CpuError {
         "the structure would hold {nodes} list nodes, more than 2^32-1; use fewer buckets or a lower resolution"
     )]
     TooManyNodes { nodes: u64 },
-}
-
-/// Per-ray traversal statistics.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RayStats {
-    /// Views whose part of the ray was walked.
-    pub views: u32,
-    /// Tiles entered.
-    pub tiles: u32,
-    /// Bucket lists scanned.
-    pub buckets: u32,
-    /// Ray/triangle tests.
-    pub tests: u32,
 }
 
 /// Wall time of each build stage.

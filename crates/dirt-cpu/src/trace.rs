@@ -89,10 +89,18 @@ pub fn trace_ray(
         exits.push(exit);
     }
     let mut visited = 0u32;
+    // The unvisited view the ray enters first (the first such on ties).
     let first_unvisited = |visited: u32| -> Option<usize> {
-        (0..n)
-            .filter(|&f| visited & (1 << f) == 0 && !ivs[f].is_empty())
-            .min_by(|&a, &b| ivs[a].t0.total_cmp(&ivs[b].t0))
+        let mut best: Option<usize> = None;
+        for f in 0..n {
+            if visited & (1 << f) == 0
+                && !ivs[f].is_empty()
+                && best.is_none_or(|b| ivs[f].t0 < ivs[b].t0)
+            {
+                best = Some(f);
+            }
+        }
+        best
     };
     let mut current = first_unvisited(visited);
     while let Some(f) = current {

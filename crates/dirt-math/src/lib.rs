@@ -19,5 +19,5 @@ pub mod types;
 pub mod view;
 
 pub use glam::Vec3;
-pub use types::{Aabb, Hit, INVALID_ID, Ray, RayProblem, Triangle};
+pub use types::{Aabb, Hit, INVALID_ID, Ray, RayProblem, RayStats, Triangle, ViewGpu};
 pub use view::{View, ViewRay, ViewSet, ViewsKind};

@@ -191,3 +191,61 @@ impl Aabb {
         self.max - self.min
     }
 }
+
+/// One view as the GPU passes read it (see [`crate::View`]), with the cube's
+/// adjacency (`adjacency[edge]` = the face across that edge; unused for a single view).
+///
+/// repr(C), Pod, 96 bytes; matches WGSL `struct View` in `shaders/wgsl/types.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ViewGpu {
+    pub apex: [f32; 3],
+    pub tan: f32,
+    pub right: [f32; 3],
+    pub near: f32,
+    pub up: [f32; 3],
+    pub far: f32,
+    pub forward: [f32; 3],
+    pub eps: f32,
+    pub tiles: u32,
+    pub step: f32,
+    pub scale: f32,
+    pub has_content: u32,
+    pub adjacency: [u32; 4],
+}
+
+impl ViewGpu {
+    pub fn new(v: &crate::View, adjacency: [u32; 4]) -> Self {
+        Self {
+            apex: v.apex.to_array(),
+            tan: v.tan,
+            right: v.right.to_array(),
+            near: v.near,
+            up: v.up.to_array(),
+            far: v.far,
+            forward: v.forward.to_array(),
+            eps: v.eps,
+            tiles: v.tiles,
+            step: v.step,
+            scale: v.scale,
+            has_content: u32::from(v.has_content),
+            adjacency,
+        }
+    }
+}
+
+/// Per-ray traversal statistics, as both backends count them.
+///
+/// repr(C), Pod, 16 bytes; matches WGSL `struct RayStats`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct RayStats {
+    /// Views whose part of the ray was walked.
+    pub views: u32,
+    /// Tiles entered.
+    pub tiles: u32,
+    /// Bucket lists scanned.
+    pub buckets: u32,
+    /// Ray/triangle tests.
+    pub tests: u32,
+}
