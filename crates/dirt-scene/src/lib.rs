@@ -81,10 +81,18 @@
 //!   tree, but not a cycle either) is instanced twice; a cycle is
 //!   [`SceneError::RecursiveNodes`]. Node transforms compose as
 //!   `global = parent_global * local`. Skins and morph targets are ignored
-//!   (bind pose / base geometry).
+//!   (bind pose / base geometry). Cameras and lights are listed in the same
+//!   traversal order.
+//!
+//!   Validation is the `gltf` crate's, with two relaxations (each recorded
+//!   as a warning): `POSITION` accessors without `min`/`max`, and a default
+//!   `scene` index that names no scene. glTF 1.0 files are refused with
+//!   [`SceneError::UnsupportedGltfVersion`].
 //! * **OBJ**: models (objects/groups, split by material as tobj does) in
 //!   file order, faces in file order; polygons are fan-triangulated by tobj
-//!   into `(v0, v[k+1], v[k+2])`.
+//!   into `(v0, v[k+1], v[k+2])`. Point (`p`) and line (`l`) elements are
+//!   ignored. A missing or unreadable `.mtl` is a warning (all faces then
+//!   use material 0).
 //! * **Built-ins**: as documented per scene in [`builtin`].
 //!
 //! # Built-in scenes
@@ -93,8 +101,9 @@
 //! room with a ceiling light and a camera inside), `layers` (256 parallel
 //! quads in depth), `foliage` (thin random triangles in a volume) and
 //! `spheres` (an 8x8 field of UV spheres on a ground quad). They are
-//! generated with a fixed-seed PRNG and are identical on every run and
-//! platform.
+//! generated with a fixed-seed PRNG (no OS randomness), so they are
+//! identical on every run; only `sin`/`cos` of the platform's maths library
+//! could make the last bits differ between platforms.
 
 mod builder;
 mod builtin;
@@ -204,12 +213,18 @@ impl Scene {
     pub fn validate(&self) -> Result<(), String> {
         let n = self.triangles.len();
         if self.tri_material.len() != n {
-            return Err(format!("tri_material has {} entries, triangles {n}", self.tri_material.len()));
+            return Err(format!(
+                "tri_material has {} entries, triangles {n}",
+                self.tri_material.len()
+            ));
         }
         if let Some(ns) = &self.tri_normals
             && ns.len() != n
         {
-            return Err(format!("tri_normals has {} entries, triangles {n}", ns.len()));
+            return Err(format!(
+                "tri_normals has {} entries, triangles {n}",
+                ns.len()
+            ));
         }
         if let Some(uvs) = &self.tri_uvs
             && uvs.len() != n
@@ -225,19 +240,35 @@ impl Scene {
         if let Some(i) = self.triangles.iter().position(|t| !t.is_finite()) {
             return Err(format!("triangle {i} is not finite"));
         }
-        if let Some(i) = self.tri_material.iter().position(|&m| m as usize >= self.materials.len()) {
-            return Err(format!("triangle {i} has material {} of {}", self.tri_material[i], self.materials.len()));
+        if let Some(i) = self
+            .tri_material
+            .iter()
+            .position(|&m| m as usize >= self.materials.len())
+        {
+            return Err(format!(
+                "triangle {i} has material {} of {}",
+                self.tri_material[i],
+                self.materials.len()
+            ));
         }
         for (i, m) in self.materials.iter().enumerate() {
             if let Some(t) = m.base_color_texture
                 && t as usize >= self.textures.len()
             {
-                return Err(format!("material {i} uses texture {t} of {}", self.textures.len()));
+                return Err(format!(
+                    "material {i} uses texture {t} of {}",
+                    self.textures.len()
+                ));
             }
         }
         for (i, t) in self.textures.iter().enumerate() {
             if t.rgba8.len() != t.width as usize * t.height as usize * 4 {
-                return Err(format!("texture {i} has {} bytes for {}x{}", t.rgba8.len(), t.width, t.height));
+                return Err(format!(
+                    "texture {i} has {} bytes for {}x{}",
+                    t.rgba8.len(),
+                    t.width,
+                    t.height
+                ));
             }
         }
         Ok(())
@@ -255,7 +286,10 @@ pub fn open(spec: &str) -> Result<Scene, SceneError> {
     }
     let path = Path::new(spec);
     if path.extension().is_none() && !path.exists() {
-        return Err(SceneError::UnknownBuiltin { name: spec.to_string(), valid: BUILTIN_NAMES.join(", ") });
+        return Err(SceneError::UnknownBuiltin {
+            name: spec.to_string(),
+            valid: BUILTIN_NAMES.join(", "),
+        });
     }
     load(path)
 }
@@ -264,11 +298,19 @@ pub fn open(spec: &str) -> Result<Scene, SceneError> {
 /// `.gltf` and `.glb` (glTF 2.0; either container is accepted under either
 /// extension), `.obj` (Wavefront OBJ with its `.mtl` materials).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
     let loader: fn(&Path) -> Result<Scene, SceneError> = match ext.as_str() {
         "gltf" | "glb" => gltf_loader::load_gltf,
         "obj" => obj_loader::load_obj,
-        _ => return Err(SceneError::UnsupportedExtension { path: path.to_path_buf(), extension: ext }),
+        _ => {
+            return Err(SceneError::UnsupportedExtension {
+                path: path.to_path_buf(),
+                extension: ext,
+            });
+        }
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| loader(path)));
     match result {
@@ -281,7 +323,10 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             } else {
                 "panic".to_string()
             };
-            Err(SceneError::Internal { path: path.to_path_buf(), message })
+            Err(SceneError::Internal {
+                path: path.to_path_buf(),
+                message,
+            })
         }
     }
 }
@@ -294,13 +339,46 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, SceneError> {
 
 pub(crate) fn io_error(path: &Path, e: std::io::Error) -> SceneError {
     if e.kind() == std::io::ErrorKind::NotFound {
-        SceneError::NotFound { path: path.to_path_buf() }
+        SceneError::NotFound {
+            path: path.to_path_buf(),
+        }
     } else {
-        SceneError::Io { path: path.to_path_buf(), source: e }
+        SceneError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        }
     }
 }
 
 /// The file stem as a scene name.
 pub(crate) fn stem(path: &Path) -> String {
-    path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_and_scenes_are_send_sync() {
+        fn check<T: Send + Sync + 'static>() {}
+        check::<SceneError>();
+        check::<Scene>();
+    }
+
+    #[test]
+    fn validate_catches_broken_invariants() {
+        let mut s = builtin("cornell").unwrap_or_default();
+        assert_eq!(s.validate(), Ok(()));
+        s.tri_material[3] = 99;
+        assert!(s.validate().is_err());
+        let mut s = builtin("layers").unwrap_or_default();
+        s.tri_material.pop();
+        assert!(s.validate().is_err());
+        let mut s = builtin("layers").unwrap_or_default();
+        s.triangles[0].v[1][2] = f32::NAN;
+        assert!(s.validate().is_err());
+    }
 }
