@@ -130,6 +130,23 @@ impl BuildTimings {
     }
 }
 
+/// Checks `params` and `tris` and makes the view set both backends build over.
+pub fn views_for(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CpuError> {
+    params.validate()?;
+    if let Some(index) = tris.iter().position(|t| !t.is_finite()) {
+        return Err(CpuError::NonFiniteTriangle { index });
+    }
+    let mut bounds = Aabb::of_triangles(tris);
+    if bounds.is_empty() {
+        bounds = Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
+    }
+    let tiles = params.tiles();
+    Ok(match params.views {
+        ViewsKind::Cube => ViewSet::cube(params.center.unwrap_or(bounds.center()), &bounds, tiles),
+        ViewsKind::Single => ViewSet::single(params.center, &bounds, tiles),
+    })
+}
+
 /// The acceleration structure: views, depth bounds with their Hi-Z pyramid,
 /// and per-bucket primitive lists.
 #[derive(Debug)]
@@ -146,24 +163,7 @@ pub struct Ads {
 impl Ads {
     /// Builds the structure: `fill_depth`, `mip_depth`, `fill_primitives`.
     pub fn build(tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
-        params.validate()?;
-        if let Some(index) = tris.iter().position(|t| !t.is_finite()) {
-            return Err(CpuError::NonFiniteTriangle { index });
-        }
-        let mut bounds = Aabb::of_triangles(tris);
-        if bounds.is_empty() {
-            bounds = Aabb {
-                min: Vec3::splat(-1.0),
-                max: Vec3::splat(1.0),
-            };
-        }
-        let tiles = params.tiles();
-        let views = match params.views {
-            ViewsKind::Cube => {
-                ViewSet::cube(params.center.unwrap_or(bounds.center()), &bounds, tiles)
-            }
-            ViewsKind::Single => ViewSet::single(params.center, &bounds, tiles),
-        };
+        let views = views_for(tris, params)?;
         let t0 = Instant::now();
         let depth = fill_depth::fill_depth(&views, tris);
         let t1 = Instant::now();

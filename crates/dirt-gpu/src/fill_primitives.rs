@@ -1,0 +1,99 @@
+//! Pass `fill_primitives` (`fill_primitives.wgsl`): counts per list (raster
+//! `count`), an exclusive prefix sum in place (compute `scan_blocks`,
+//! `scan_add`), the total read back to size the id buffer exactly, then the
+//! lists filled through atomic cursors (raster `fill`). Nothing is ever
+//! dropped: the buffer is as large as the count says, or the build fails
+//! before filling with [`GpuError::TooLarge`]. Mirrors `dirt_cpu::fill_primitives`.
+
+use crate::fill_depth::draw_coverage;
+use crate::{BuildParams, Gpu, GpuError, ScanParams, check_binding, read_back, storage_init, uniform_init};
+
+const SCAN_BLOCK: u64 = 256;
+
+/// Workgroups for `n` elements, as a 2D grid when one dimension is not enough.
+pub(crate) fn grid(gpu: &Gpu, groups: u64) -> (u32, u32) {
+    let max = gpu.limits.max_compute_workgroups_per_dimension as u64;
+    if groups <= max {
+        (groups.max(1) as u32, 1)
+    } else {
+        (max as u32, groups.div_ceil(max) as u32)
+    }
+}
+
+/// Exclusive prefix sum of the first `n` u32 of `data`, in place.
+fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
+    // Levels: data (n), then per-block sums until one block holds everything.
+    let mut levels: Vec<(wgpu::Buffer, u64)> = Vec::new();
+    let mut sums_of: Vec<wgpu::Buffer> = Vec::new();
+    let mut count = n;
+    loop {
+        let blocks = count.div_ceil(SCAN_BLOCK);
+        sums_of.push(storage_init(gpu, "scan sums", &vec![0u8; (blocks * 4) as usize], wgpu::BufferUsages::empty()));
+        levels.push((if levels.is_empty() { data.clone() } else { sums_of[sums_of.len() - 2].clone() }, count));
+        if blocks <= 1 {
+            break;
+        }
+        count = blocks;
+    }
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    let mut keep = Vec::new();
+    let mut run = |enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, data: &wgpu::Buffer, sums: &wgpu::Buffer, n: u64| {
+        let u = uniform_init(gpu, "scan params", bytemuck::bytes_of(&ScanParams { n: n as u32, ..Default::default() }));
+        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scan"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry { binding: 6, resource: data.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 7, resource: sums.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 8, resource: u.as_entire_binding() },
+            ],
+        });
+        let (x, y) = grid(gpu, n.div_ceil(SCAN_BLOCK));
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        drop(pass);
+        keep.push(u);
+    };
+    for (k, (buf, n)) in levels.iter().enumerate() {
+        run(&mut enc, &gpu.pipelines.scan_blocks, buf, &sums_of[k], *n);
+    }
+    for k in (0..levels.len().saturating_sub(1)).rev() {
+        let (buf, n) = &levels[k];
+        run(&mut enc, &gpu.pipelines.scan_add, buf, &sums_of[k], *n);
+    }
+    gpu.queue.submit([enc.finish()]);
+    gpu.wait()
+}
+
+fn coverage_bind(gpu: &Gpu, pipeline: &wgpu::RenderPipeline, bufs: &[(u32, &wgpu::Buffer)]) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = bufs.iter().map(|(b, buf)| wgpu::BindGroupEntry { binding: *b, resource: buf.as_entire_binding() }).collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("fill_primitives"), layout: &pipeline.get_bind_group_layout(0), entries: &entries })
+}
+
+/// Returns (offsets, ids, node count).
+pub(crate) fn fill_primitives(gpu: &Gpu, tris: &wgpu::Buffer, views: &wgpu::Buffer, build_uniform: &wgpu::Buffer, hiz: &wgpu::Buffer, build: &BuildParams, n_lists: u64) -> Result<(wgpu::Buffer, wgpu::Buffer, u32), GpuError> {
+    // Counts, then (after the scan) offsets; one extra zero so offsets[n_lists] is the total.
+    let lists = storage_init(gpu, "lists", &vec![0u8; ((n_lists + 1) * 4) as usize], wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
+    if build.n_tris > 0 {
+        let p = &gpu.pipelines.count;
+        let bind = coverage_bind(gpu, p, &[(0, tris), (1, views), (2, build_uniform), (3, hiz), (4, &lists)]);
+        draw_coverage(gpu, p, &bind, build);
+    }
+    scan(gpu, &lists, n_lists + 1)?;
+    let total = bytemuck::pod_read_unaligned::<u32>(&read_back(gpu, &lists, n_lists * 4, 4)?);
+    check_binding(gpu, "list ids", total as u64 * 4)?;
+    let ids = storage_init(gpu, "ids", &vec![0u8; total as usize * 4], wgpu::BufferUsages::COPY_SRC);
+    if total > 0 {
+        let cursors = storage_init(gpu, "cursors", &vec![0u8; ((n_lists + 1) * 4) as usize], wgpu::BufferUsages::COPY_DST);
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&lists, 0, &cursors, 0, (n_lists + 1) * 4);
+        gpu.queue.submit([enc.finish()]);
+        let p = &gpu.pipelines.fill;
+        let bind = coverage_bind(gpu, p, &[(0, tris), (1, views), (2, build_uniform), (3, hiz), (4, &cursors), (5, &ids)]);
+        draw_coverage(gpu, p, &bind, build);
+        gpu.wait()?;
+    }
+    Ok((lists, ids, total))
+}

@@ -1,0 +1,290 @@
+//! dirt-gpu: DIRT on wgpu, one pass per stage, mirroring `dirt-cpu` one to one:
+//!
+//! | stage | pass | WGSL |
+//! |---|---|---|
+//! | `fill_depth` | raster: `cover_vs` + `fill_depth` | `fill_depth.wgsl` (+ `coverage.wgsl`) |
+//! | `mip_depth` | compute, one dispatch per level | `mip_depth.wgsl` |
+//! | `fill_primitives` | raster `count`, compute `scan_blocks`/`scan_add`, raster `fill` | `fill_primitives.wgsl` |
+//! | `trace` | compute, one thread per ray | `trace.wgsl` |
+//!
+//! On lavapipe (the CI device) every output equals the CPU reference's to the
+//! bit: depth bounds, Hi-Z levels, list contents (as sets) and hits.
+
+mod context;
+pub mod fill_depth;
+pub mod fill_primitives;
+pub mod mip_depth;
+pub mod params;
+pub mod trace;
+
+pub use context::Gpu;
+pub use params::{BuildParams, MipParams, ScanParams, TraceParams};
+
+use dirt_cpu::{AdsParams, CpuError, IdLists};
+use dirt_math::dda::{hiz_levels, hiz_width};
+use dirt_math::{Triangle, ViewGpu, ViewSet};
+use std::time::{Duration, Instant};
+use wgpu::util::DeviceExt;
+
+/// Errors of the GPU backend.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("no GPU adapter ({0}); install mesa-vulkan-drivers for the software one and set WGPU_BACKEND=vulkan")]
+    NoAdapter(String),
+    #[error("GPU device error: {0}")]
+    Device(String),
+    #[error("shader `{stage}` failed: {message}")]
+    Shader { stage: &'static str, message: String },
+    #[error(transparent)]
+    Params(#[from] CpuError),
+    #[error("{what} needs {bytes} bytes in one binding; this adapter allows {limit} (max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene")]
+    TooLarge { what: &'static str, bytes: u64, limit: u64 },
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+}
+
+/// Compiled pipelines, made once per device.
+#[derive(Debug)]
+pub(crate) struct Pipelines {
+    fill_depth: wgpu::RenderPipeline,
+    mip_depth: wgpu::ComputePipeline,
+    count: wgpu::RenderPipeline,
+    scan_blocks: wgpu::ComputePipeline,
+    scan_add: wgpu::ComputePipeline,
+    fill: wgpu::RenderPipeline,
+    trace: wgpu::ComputePipeline,
+}
+
+/// Render target format of the raster passes. Nothing is written to it (the
+/// passes write storage buffers); WebGPU needs an attachment to rasterize.
+const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
+fn module(device: &wgpu::Device, stage: &'static str) -> Result<wgpu::ShaderModule, GpuError> {
+    let composed = dirt_shaders::compose(stage).map_err(|e| GpuError::Shader { stage, message: e.to_string() })?;
+    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(stage),
+        source: wgpu::ShaderSource::Wgsl(composed.text.into()),
+    }))
+}
+
+fn raster(device: &wgpu::Device, m: &wgpu::ShaderModule, fs: &str) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(fs),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: m,
+            entry_point: Some("cover_vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: m,
+            entry_point: Some(fs),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: TARGET_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::empty(),
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+fn compute(device: &wgpu::Device, m: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module: m,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+impl Pipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Result<Pipelines, GpuError> {
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let fd = module(device, "fill_depth")?;
+        let md = module(device, "mip_depth")?;
+        let fp = module(device, "fill_primitives")?;
+        let tr = module(device, "trace")?;
+        let p = Pipelines {
+            fill_depth: raster(device, &fd, "fill_depth"),
+            mip_depth: compute(device, &md, "mip_depth"),
+            count: raster(device, &fp, "count"),
+            scan_blocks: compute(device, &fp, "scan_blocks"),
+            scan_add: compute(device, &fp, "scan_add"),
+            fill: raster(device, &fp, "fill"),
+            trace: compute(device, &tr, "trace"),
+        };
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Shader { stage: "pipelines", message: e.to_string() });
+        }
+        Ok(p)
+    }
+}
+
+/// Wall time of each build stage (submission to completion).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GpuTimings {
+    pub fill_depth: Duration,
+    pub mip_depth: Duration,
+    pub fill_primitives: Duration,
+}
+
+/// The acceleration structure on the GPU.
+#[derive(Debug)]
+pub struct GpuAds {
+    pub params: AdsParams,
+    pub views: ViewSet,
+    pub n_tris: u32,
+    pub nodes: u32,
+    pub timings: GpuTimings,
+    pub(crate) tris: wgpu::Buffer,
+    pub(crate) views_uniform: wgpu::Buffer,
+    /// All Hi-Z levels, level 0 (the depth bounds) first; two u32 per cell.
+    pub(crate) hiz: wgpu::Buffer,
+    /// `views·tiles²·B + 1` offsets after the scan.
+    pub(crate) offsets: wgpu::Buffer,
+    pub(crate) ids: wgpu::Buffer,
+}
+
+/// Checks that one binding of `bytes` fits the adapter.
+pub(crate) fn check_binding(gpu: &Gpu, what: &'static str, bytes: u64) -> Result<(), GpuError> {
+    let limit = gpu.limits.max_storage_buffer_binding_size as u64;
+    if bytes > limit {
+        return Err(GpuError::TooLarge { what, bytes, limit });
+    }
+    Ok(())
+}
+
+/// A storage buffer holding `data` (at least 16 bytes: empty bindings are invalid).
+pub(crate) fn storage_init(gpu: &Gpu, label: &str, data: &[u8], extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    let mut bytes = data.to_vec();
+    if bytes.len() < 16 {
+        bytes.resize(16, 0);
+    }
+    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: &bytes,
+        usage: wgpu::BufferUsages::STORAGE | extra,
+    })
+}
+
+pub(crate) fn uniform_init(gpu: &Gpu, label: &str, data: &[u8]) -> wgpu::Buffer {
+    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: data,
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
+/// Copies `size` bytes of `src` from `offset` back to the CPU.
+pub(crate) fn read_back(gpu: &Gpu, src: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>, GpuError> {
+    let size = size.div_ceil(4) * 4;
+    if size == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(src, offset, &staging, 0, size);
+    gpu.queue.submit([enc.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.wait()?;
+    rx.recv()
+        .map_err(|e| GpuError::Readback(e.to_string()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let view = staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
+    let out = view.to_vec();
+    drop(view);
+    staging.unmap();
+    Ok(out)
+}
+
+/// The views as the shaders read them: always six entries (unused ones zero).
+fn views_gpu(views: &ViewSet) -> [ViewGpu; 6] {
+    let mut out = [ViewGpu::default(); 6];
+    for (k, v) in views.views.iter().enumerate().take(6) {
+        out[k] = ViewGpu::new(v, views.adjacency.get(k).copied().unwrap_or([0; 4]));
+    }
+    out
+}
+
+impl GpuAds {
+    /// Builds the structure on the GPU: `fill_depth`, `mip_depth`, `fill_primitives`.
+    pub fn build(gpu: &Gpu, tris: &[Triangle], params: &AdsParams) -> Result<GpuAds, GpuError> {
+        let views = dirt_cpu::views_for(tris, params)?;
+        let tiles = params.tiles();
+        let n_views = views.views.len() as u32;
+        let n_tris = u32::try_from(tris.len()).map_err(|_| CpuError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len())))?;
+        // Everything that must fit one binding is checked before any work starts.
+        check_binding(gpu, "triangles", tris.len() as u64 * 36)?;
+        let levels = hiz_levels(tiles);
+        let cells: u64 = (0..levels).map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_views as u64).sum();
+        check_binding(gpu, "Hi-Z pyramid", cells * 8)?;
+        let n_lists = n_views as u64 * (tiles as u64).pow(2) * params.buckets as u64;
+        check_binding(gpu, "list offsets", (n_lists + 1) * 4)?;
+
+        let tri_buf = storage_init(gpu, "triangles", bytemuck::cast_slice(tris), wgpu::BufferUsages::empty());
+        let views_uniform = uniform_init(gpu, "views", bytemuck::cast_slice(&views_gpu(&views)));
+        let build = BuildParams { n_tris, n_views, tiles, buckets: params.buckets };
+        let build_uniform = uniform_init(gpu, "build params", bytemuck::bytes_of(&build));
+        let hiz = fill_depth::new_hiz_buffer(gpu, cells)?;
+
+        let t0 = Instant::now();
+        fill_depth::fill_depth(gpu, &tri_buf, &views_uniform, &build_uniform, &hiz, &build)?;
+        let t1 = Instant::now();
+        mip_depth::mip_depth(gpu, &hiz, tiles, n_views)?;
+        let t2 = Instant::now();
+        let (offsets, ids, nodes) = fill_primitives::fill_primitives(gpu, &tri_buf, &views_uniform, &build_uniform, &hiz, &build, n_lists)?;
+        let t3 = Instant::now();
+        Ok(GpuAds {
+            params: *params,
+            views,
+            n_tris,
+            nodes,
+            timings: GpuTimings { fill_depth: t1 - t0, mip_depth: t2 - t1, fill_primitives: t3 - t2 },
+            tris: tri_buf,
+            views_uniform,
+            hiz,
+            offsets,
+            ids,
+        })
+    }
+
+    /// Hi-Z levels read back, level 0 (the depth bounds) first, in the CPU's layout.
+    pub fn read_hiz(&self, gpu: &Gpu) -> Result<Vec<Vec<[u32; 2]>>, GpuError> {
+        let tiles = self.params.tiles();
+        let n_views = self.views.views.len() as u64;
+        let mut out = Vec::new();
+        let mut base = 0u64;
+        for l in 0..hiz_levels(tiles) {
+            let n = (hiz_width(tiles, l) as u64).pow(2) * n_views;
+            let bytes = read_back(gpu, &self.hiz, base * 8, n * 8)?;
+            out.push(bytemuck::pod_collect_to_vec::<u8, [u32; 2]>(&bytes));
+            base += n;
+        }
+        Ok(out)
+    }
+
+    /// The id lists read back (offsets and ids; ids in GPU order inside each list).
+    pub fn read_lists(&self, gpu: &Gpu) -> Result<IdLists, GpuError> {
+        let n_lists = self.views.views.len() as u64 * (self.params.tiles() as u64).pow(2) * self.params.buckets as u64;
+        let offsets = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(gpu, &self.offsets, 0, (n_lists + 1) * 4)?);
+        let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(gpu, &self.ids, 0, self.nodes as u64 * 4)?);
+        Ok(IdLists { offsets, ids: ids[..self.nodes as usize].to_vec() })
+    }
+}

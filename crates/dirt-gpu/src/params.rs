@@ -1,0 +1,49 @@
+//! Uniform structs of the passes. Each is declared here once; a test compares
+//! size and offsets with the WGSL declarations as naga sees them.
+
+use bytemuck::{Pod, Zeroable};
+
+/// `struct BuildParams` of `coverage.wgsl`. repr(C), Pod, 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct BuildParams {
+    pub n_tris: u32,
+    pub n_views: u32,
+    pub tiles: u32,
+    pub buckets: u32,
+}
+
+/// `struct MipParams` of `mip_depth.wgsl`. repr(C), Pod, 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct MipParams {
+    pub src_base: u32,
+    pub dst_base: u32,
+    pub src_w: u32,
+    pub dst_w: u32,
+}
+
+/// `struct ScanParams` of `fill_primitives.wgsl`. repr(C), Pod, 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct ScanParams {
+    pub n: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+/// `struct TraceParams` of `trace.wgsl`. repr(C), Pod, 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct TraceParams {
+    pub n_rays: u32,
+    pub n_views: u32,
+    pub tiles: u32,
+    pub buckets: u32,
+    pub levels: u32,
+    /// 0 = linear, 1 = Hi-Z.
+    pub traversal: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}

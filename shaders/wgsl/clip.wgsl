@@ -1,0 +1,286 @@
+// Mirrors dirt_math::clip: dilated half-spaces, ray intervals, polygon
+// clipping and per-tile depth extents.
+#import types
+#import num
+#import divide
+#import view
+
+// dirt_math::clip::HalfSpace as (kind, axis, s): kind 0 = Lo, 1 = Hi, 2 = Near (s = near), 3 = Far (s = far).
+struct HalfSpace {
+    kind: u32,
+    axis: u32,
+    s: f32,
+}
+
+fn hs_eval(h: HalfSpace, p: vec3<f32>, eps: f32) -> f32 {
+    switch h.kind {
+        case 0u: {
+            return p[h.axis] - h.s * p[2] + eps;
+        }
+        case 1u: {
+            return h.s * p[2] - p[h.axis] + eps;
+        }
+        case 2u: {
+            return p[2] - h.s + eps;
+        }
+        default: {
+            return h.s - p[2] + eps;
+        }
+    }
+}
+
+fn hs_slope(h: HalfSpace, d: vec3<f32>) -> f32 {
+    switch h.kind {
+        case 0u: {
+            return d[h.axis] - h.s * d[2];
+        }
+        case 1u: {
+            return h.s * d[2] - d[h.axis];
+        }
+        case 2u: {
+            return d[2];
+        }
+        default: {
+            return -d[2];
+        }
+    }
+}
+
+fn hs_lo(axis: u32, s: f32) -> HalfSpace {
+    return HalfSpace(0u, axis, s);
+}
+
+fn hs_hi(axis: u32, s: f32) -> HalfSpace {
+    return HalfSpace(1u, axis, s);
+}
+
+// dirt_math::clip::Interval
+struct Interval {
+    t0: f32,
+    t1: f32,
+}
+
+fn interval_empty() -> Interval {
+    return Interval(f32_inf(), f32_neg_inf());
+}
+
+fn is_empty(iv: Interval) -> bool {
+    return !(iv.t0 <= iv.t1);
+}
+
+// Intersects with the half-space; true when t1 moved.
+fn clip_interval(iv: ptr<function, Interval>, h: HalfSpace, vr: ViewRay) -> bool {
+    let f0 = hs_eval(h, vr.o, vr.eps);
+    let f1 = hs_slope(h, vr.d);
+    if f1 > 0.0 {
+        let t = div_cr(-f0, f1);
+        if t > (*iv).t0 {
+            (*iv).t0 = t;
+        }
+    } else if f1 < 0.0 {
+        let t = div_cr(-f0, f1);
+        if t < (*iv).t1 {
+            (*iv).t1 = t;
+            return true;
+        }
+    } else if !(f0 >= 0.0) {
+        *iv = interval_empty();
+    }
+    return false;
+}
+
+fn ray_point(vr: ViewRay, t: f32) -> vec3<f32> {
+    return vec3<f32>(vr.o[0] + t * vr.d[0], vr.o[1] + t * vr.d[1], vr.o[2] + t * vr.d[2]);
+}
+
+fn ray_depth(vr: ViewRay, t: f32) -> f32 {
+    return vr.o[2] + t * vr.d[2];
+}
+
+// The k-th of the six half-spaces of a whole view (dirt_math::clip::view_frustum).
+fn view_halfspace(v: View, k: u32) -> HalfSpace {
+    switch k {
+        case 0u: {
+            return HalfSpace(0u, 0u, -v.tan);
+        }
+        case 1u: {
+            return HalfSpace(1u, 0u, v.tan);
+        }
+        case 2u: {
+            return HalfSpace(0u, 1u, -v.tan);
+        }
+        case 3u: {
+            return HalfSpace(1u, 1u, v.tan);
+        }
+        case 4u: {
+            return HalfSpace(2u, 0u, v.near);
+        }
+        default: {
+            return HalfSpace(3u, 0u, v.far);
+        }
+    }
+}
+
+// The k-th side half-space of the tile block [i0, i1) x [j0, j1) (dirt_math::clip::block_frustum).
+fn block_halfspace(v: View, i0: u32, i1: u32, j0: u32, j1: u32, k: u32) -> HalfSpace {
+    switch k {
+        case 0u: {
+            return HalfSpace(0u, 0u, boundary(v, i0));
+        }
+        case 1u: {
+            return HalfSpace(1u, 0u, boundary(v, i1));
+        }
+        case 2u: {
+            return HalfSpace(0u, 1u, boundary(v, j0));
+        }
+        default: {
+            return HalfSpace(1u, 1u, boundary(v, j1));
+        }
+    }
+}
+
+const NO_EXIT: u32 = 0xffffffffu;
+
+struct ViewClip {
+    iv: Interval,
+    exit: u32,
+}
+
+// dirt_math::clip::clip_ray_to_view
+fn clip_ray_to_view(v: View, vr: ViewRay, tmin: f32, tmax: f32) -> ViewClip {
+    var iv = Interval(tmin, tmax);
+    var exit = NO_EXIT;
+    for (var k = 0u; k < 6u; k++) {
+        if clip_interval(&iv, view_halfspace(v, k), vr) {
+            exit = select(NO_EXIT, k, k < 4u);
+        }
+        if is_empty(iv) {
+            return ViewClip(interval_empty(), NO_EXIT);
+        }
+    }
+    return ViewClip(iv, exit);
+}
+
+const MAX_POLY: u32 = 16u;
+
+struct Polygon {
+    len: u32,
+    v: array<vec3<f32>, 16>,
+}
+
+fn polygon_triangle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> Polygon {
+    var p: Polygon;
+    p.len = 3u;
+    p.v[0] = a;
+    p.v[1] = b;
+    p.v[2] = c;
+    return p;
+}
+
+// Sutherland-Hodgman against one half-space; points on the boundary are kept.
+fn polygon_clip(poly: ptr<function, Polygon>, h: HalfSpace, eps: f32) {
+    let n = (*poly).len;
+    if n == 0u {
+        return;
+    }
+    var out: array<vec3<f32>, 16>;
+    var m = 0u;
+    for (var k = 0u; k < n; k++) {
+        let p = (*poly).v[k];
+        let q = (*poly).v[(k + 1u) % n];
+        let fp = hs_eval(h, p, eps);
+        let fq = hs_eval(h, q, eps);
+        if fp >= 0.0 && m < MAX_POLY {
+            out[m] = p;
+            m += 1u;
+        }
+        if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
+            let w = div_cr(fp, fp - fq);
+            out[m] = vec3<f32>(p[0] + (q[0] - p[0]) * w, p[1] + (q[1] - p[1]) * w, p[2] + (q[2] - p[2]) * w);
+            m += 1u;
+        }
+    }
+    (*poly).v = out;
+    (*poly).len = m;
+}
+
+// Depth range of the vertices; x > y when empty.
+fn polygon_depth_range(poly: ptr<function, Polygon>) -> vec2<f32> {
+    var lo = f32_inf();
+    var hi = f32_neg_inf();
+    for (var k = 0u; k < (*poly).len; k++) {
+        lo = fmin(lo, (*poly).v[k][2]);
+        hi = fmax(hi, (*poly).v[k][2]);
+    }
+    return vec2<f32>(lo, hi);
+}
+
+// dirt_math::clip::clip_triangle_to_view; an empty polygon when outside.
+fn clip_triangle_to_view(v: View, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> Polygon {
+    var poly = polygon_triangle(a, b, c);
+    for (var k = 0u; k < 6u; k++) {
+        polygon_clip(&poly, view_halfspace(v, k), v.eps);
+        if poly.len == 0u {
+            return poly;
+        }
+    }
+    return poly;
+}
+
+struct Extent {
+    ok: bool,
+    lo: f32,
+    hi: f32,
+}
+
+// dirt_math::clip::tile_depth_extent
+fn tile_depth_extent(v: View, poly: Polygon, i: u32, j: u32) -> Extent {
+    var p = poly;
+    for (var k = 0u; k < 4u; k++) {
+        polygon_clip(&p, block_halfspace(v, i, i + 1u, j, j + 1u, k), v.eps);
+        if p.len == 0u {
+            return Extent(false, 0.0, 0.0);
+        }
+    }
+    let r = polygon_depth_range(&p);
+    return Extent(true, r.x - v.eps, r.y + v.eps);
+}
+
+struct TileRange {
+    ok: bool,
+    i0: u32,
+    i1: u32,
+    j0: u32,
+    j1: u32,
+}
+
+// dirt_math::clip::polygon_tile_range
+fn polygon_tile_range(v: View, poly: Polygon) -> TileRange {
+    let none = TileRange(false, 0u, 0u, 0u, 0u);
+    if poly.len == 0u {
+        return none;
+    }
+    var pl = poly;
+    let zlo = polygon_depth_range(&pl).x;
+    let z = fmax(zlo, v.near * 0.5);
+    let delta = div_cr(div_cr(v.eps, z), v.step) + 0.00390625;
+    var xlo = f32_inf();
+    var xhi = f32_neg_inf();
+    var ylo = f32_inf();
+    var yhi = f32_neg_inf();
+    for (var k = 0u; k < poly.len; k++) {
+        let p = poly.v[k];
+        let pz = fmax(p[2], v.near * 0.5);
+        let x = tile_coord(v, div_cr(p[0], pz));
+        let y = tile_coord(v, div_cr(p[1], pz));
+        xlo = fmin(xlo, x);
+        xhi = fmax(xhi, x);
+        ylo = fmin(ylo, y);
+        yhi = fmax(yhi, y);
+    }
+    let last = v.tiles - 1u;
+    if !(xhi + delta >= 0.0 && yhi + delta >= 0.0 && xlo - delta <= f32(v.tiles) && ylo - delta <= f32(v.tiles)) {
+        return none;
+    }
+    return TileRange(true, floor_index(xlo - delta, last), floor_index(xhi + delta, last), floor_index(ylo - delta, last), floor_index(yhi + delta, last));
+}

@@ -1,0 +1,82 @@
+// Conservative coverage by rasterization without the hardware feature: the
+// vertex shader draws, per (view, triangle), the pixel-aligned quad of the
+// tile range `dirt_math::clip::polygon_tile_range` gives (one pixel = one
+// tile); the fragment shader runs the exact tile test. Together they are
+// dirt_math::clip::for_each_covered_tile, shared by fill_depth and fill_primitives.
+#import types
+#import view
+#import clip
+
+// dirt_gpu::BuildParams
+struct BuildParams {
+    n_tris: u32,
+    n_views: u32,
+    tiles: u32,
+    buckets: u32,
+}
+
+@group(0) @binding(0) var<storage, read> tris: array<f32>;
+@group(0) @binding(1) var<uniform> views: array<View, 6>;
+@group(0) @binding(2) var<uniform> params: BuildParams;
+
+struct CoverOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) @interpolate(flat) prim: u32,
+    @location(1) @interpolate(flat) view: u32,
+}
+
+fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
+    let b = prim * 9u + k * 3u;
+    return vec3<f32>(tris[b], tris[b + 1u], tris[b + 2u]);
+}
+
+// The triangle in view space, clipped to the view.
+fn view_polygon(v: View, prim: u32) -> Polygon {
+    return clip_triangle_to_view(v, to_view(v, tri_vertex(prim, 0u)), to_view(v, tri_vertex(prim, 1u)), to_view(v, tri_vertex(prim, 2u)));
+}
+
+// Six vertices per triangle, one instance per view.
+@vertex
+fn cover_vs(@builtin(vertex_index) vi: u32, @builtin(instance_index) view: u32) -> CoverOut {
+    let prim = vi / 6u;
+    let corner = vi % 6u;
+    var out: CoverOut;
+    out.prim = prim;
+    out.view = view;
+    // Outside the viewport: no fragments.
+    out.pos = vec4<f32>(-2.0, -2.0, 0.0, 1.0);
+    let v = views[view];
+    if v.has_content == 0u || prim >= params.n_tris {
+        return out;
+    }
+    let r = polygon_tile_range(v, view_polygon(v, prim));
+    if !r.ok {
+        return out;
+    }
+    // Corners 0..5: (lo,lo) (hi,lo) (lo,hi) (hi,lo) (hi,hi) (lo,hi).
+    let x_hi = corner == 1u || corner == 3u || corner == 4u;
+    let y_hi = corner == 2u || corner == 4u || corner == 5u;
+    let x = f32(select(r.i0, r.i1 + 1u, x_hi));
+    let y = f32(select(r.j0, r.j1 + 1u, y_hi));
+    let s = 2.0 / f32(v.tiles);
+    // Framebuffer row y is tile row j.
+    out.pos = vec4<f32>(x * s - 1.0, 1.0 - y * s, 0.0, 1.0);
+    return out;
+}
+
+struct Covered {
+    ok: bool,
+    tile: u32,
+    lo: f32,
+    hi: f32,
+}
+
+// The fragment's tile and the triangle's depth extent there.
+fn covered(in: CoverOut) -> Covered {
+    let v = views[in.view];
+    let i = u32(in.pos.x);
+    let j = u32(in.pos.y);
+    let e = tile_depth_extent(v, view_polygon(v, in.prim), i, j);
+    let tile = in.view * tile_count(v) + j * v.tiles + i;
+    return Covered(e.ok, tile, e.lo, e.hi);
+}

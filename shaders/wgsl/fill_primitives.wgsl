@@ -1,0 +1,105 @@
+// Stage `fill_primitives`: per (view, tile, bucket) lists of primitive ids,
+// sized exactly by counting. Mirrors dirt_cpu::fill_primitives in three steps:
+// `count` (raster, atomic add per list), `scan_blocks` + `scan_add` (exclusive
+// prefix sum of the counts, in place) and `fill` (raster, atomic cursors).
+#import types
+#import encode
+#import bucket
+#import coverage
+
+@group(0) @binding(3) var<storage, read> depth: array<u32>;
+// Counts while counting; cursors (a copy of the offsets) while filling.
+@group(0) @binding(4) var<storage, read_write> lists: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> ids: array<u32>;
+
+// The bucket range of a covered fragment, as dirt_math::bucket::bucket_range.
+fn bucket_span(c: Covered) -> vec3<u32> {
+    let zmin = ordered_to_f32(depth[2u * c.tile]);
+    let zmax = ordered_to_f32(depth[2u * c.tile + 1u]);
+    if !(c.hi >= zmin && c.lo <= zmax) {
+        return vec3<u32>(0u, 1u, 0u); // empty: x > ... flagged by z == 0
+    }
+    return vec3<u32>(bucket_of(c.lo, zmin, zmax, params.buckets), bucket_of(c.hi, zmin, zmax, params.buckets), 1u);
+}
+
+@fragment
+fn count(in: CoverOut) {
+    let c = covered(in);
+    if !c.ok {
+        return;
+    }
+    let b = bucket_span(c);
+    if b.z == 0u {
+        return;
+    }
+    for (var k = b.x; k <= b.y; k++) {
+        atomicAdd(&lists[c.tile * params.buckets + k], 1u);
+    }
+}
+
+@fragment
+fn fill(in: CoverOut) {
+    let c = covered(in);
+    if !c.ok {
+        return;
+    }
+    let b = bucket_span(c);
+    if b.z == 0u {
+        return;
+    }
+    for (var k = b.x; k <= b.y; k++) {
+        let at = atomicAdd(&lists[c.tile * params.buckets + k], 1u);
+        ids[at] = in.prim;
+    }
+}
+
+// Exclusive prefix sum, 256 elements per workgroup, in place; each block's
+// total goes to `scan_sums` for the next level.
+struct ScanParams {
+    n: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+@group(0) @binding(6) var<storage, read_write> scan_data: array<u32>;
+@group(0) @binding(7) var<storage, read_write> scan_sums: array<u32>;
+@group(0) @binding(8) var<uniform> scan: ScanParams;
+
+var<workgroup> scan_shared: array<u32, 256>;
+
+@compute @workgroup_size(256)
+fn scan_blocks(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let block = wid.x + wid.y * nwg.x;
+    let i = block * 256u + lid.x;
+    var x = 0u;
+    if i < scan.n {
+        x = scan_data[i];
+    }
+    scan_shared[lid.x] = x;
+    workgroupBarrier();
+    for (var off = 1u; off < 256u; off = off * 2u) {
+        var y = 0u;
+        if lid.x >= off {
+            y = scan_shared[lid.x - off];
+        }
+        workgroupBarrier();
+        scan_shared[lid.x] += y;
+        workgroupBarrier();
+    }
+    if i < scan.n {
+        scan_data[i] = scan_shared[lid.x] - x;
+    }
+    if lid.x == 255u {
+        scan_sums[block] = scan_shared[255];
+    }
+}
+
+@compute @workgroup_size(256)
+fn scan_add(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let block = wid.x + wid.y * nwg.x;
+    let i = block * 256u + lid.x;
+    if i < scan.n {
+        scan_data[i] += scan_sums[block];
+    }
+}

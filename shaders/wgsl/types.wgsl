@@ -1,0 +1,67 @@
+// GPU structs. Each is declared once in Rust (dirt-math `types`), and a test
+// compares size and offsets with these declarations as naga sees them.
+
+// dirt_math::Ray (32 bytes)
+struct Ray {
+    origin: vec3<f32>,
+    tmin: f32,
+    dir: vec3<f32>,
+    tmax: f32,
+}
+
+// dirt_math::Hit (16 bytes); prim == 0xffffffff is a miss.
+struct Hit {
+    prim: u32,
+    t: f32,
+    u: f32,
+    v: f32,
+}
+
+// dirt_math::ViewGpu (96 bytes)
+struct View {
+    apex: vec3<f32>,
+    tan: f32,
+    right: vec3<f32>,
+    near: f32,
+    up: vec3<f32>,
+    far: f32,
+    forward: vec3<f32>,
+    eps: f32,
+    tiles: u32,
+    step: f32,
+    scale: f32,
+    has_content: u32,
+    adjacency: vec4<u32>,
+}
+
+// dirt_math::RayStats (16 bytes)
+struct RayStats {
+    views: u32,
+    tiles: u32,
+    buckets: u32,
+    tests: u32,
+}
+
+const INVALID_ID: u32 = 0xffffffffu;
+
+// WGSL has no infinity literal: make them from bits.
+fn f32_inf() -> f32 {
+    return bitcast<f32>(0x7f800000u);
+}
+fn f32_neg_inf() -> f32 {
+    return bitcast<f32>(0xff800000u);
+}
+
+// A miss (dirt_math::Hit::MISS).
+fn hit_miss() -> Hit {
+    return Hit(INVALID_ID, f32_inf(), 0.0, 0.0);
+}
+
+fn hit_is_hit(h: Hit) -> bool {
+    return h.prim != INVALID_ID;
+}
+
+// The deterministic order of the design brief §2: smaller t, then smaller id.
+fn hit_closer_than(a: Hit, b: Hit) -> bool {
+    return a.t < b.t || (a.t == b.t && a.prim < b.prim);
+}
