@@ -1,0 +1,639 @@
+//! The `.npy` files of the command line.
+//!
+//! | file        | dtype     | shape    | row                                          |
+//! |-------------|-----------|----------|----------------------------------------------|
+//! | `RAYS.npy`  | `float32` | `(N, 8)` | `ox oy oz tmin dx dy dz tmax`                |
+//! | `HITS.npy`  | `uint32`  | `(N, 4)` | `prim, bits(t), bits(u), bits(v)`            |
+//! | `TRIS.npy`  | `float32` | `(T, 9)` | `v0 v1 v2`, world space, flattened order     |
+//!
+//! All arrays are C order (row-major). A miss is written as [`Hit::MISS`]:
+//! `prim = 0xFFFFFFFF`, `t = +inf`, `u = v = 0`. Rays are validated when read
+//! ([`Ray::validate`]); the first bad row is reported by its 0-based index.
+
+use std::fs::File;
+use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use dirt_math::{Hit, Ray, RayProblem, Triangle};
+use npyz::{DType, NpyFile, Order, TypeChar, WriteOptions, WriterBuilder};
+
+/// Floats per row of a rays file.
+pub const RAY_COLUMNS: u64 = 8;
+/// Words per row of a hits file.
+pub const HIT_COLUMNS: u64 = 4;
+/// Floats per row of a triangles file.
+pub const TRIANGLE_COLUMNS: u64 = 9;
+
+/// What can go wrong reading or writing the `.npy` files of the command line.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    #[error("cannot open {}", path.display())]
+    Open {
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+    #[error("{}: not a .npy file ({reason})", path.display())]
+    NotNpy { path: PathBuf, reason: String },
+    #[error("{}: dtype is {found}, expected float32 ('<f4'); convert with array.astype(numpy.float32)", path.display())]
+    DType { path: PathBuf, found: String },
+    #[error("{}: shape is {}, expected (N, {columns})", path.display(), shape_text(found))]
+    Shape {
+        path: PathBuf,
+        found: Vec<u64>,
+        columns: u64,
+    },
+    #[error(
+        "{}: array is stored in Fortran order; save it in C order (numpy.ascontiguousarray) before numpy.save",
+        path.display()
+    )]
+    FortranOrder { path: PathBuf },
+    #[error("{}: cannot read the data after the header ({reason}); is the file truncated?", path.display())]
+    Data { path: PathBuf, reason: String },
+    #[error("{}: row {row}: {problem} (ray: {})", path.display(), row_text(values))]
+    BadRay {
+        path: PathBuf,
+        row: usize,
+        problem: RayProblem,
+        values: [f32; 8],
+    },
+    #[error("cannot write {}", path.display())]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+}
+
+impl CliError {
+    /// The 0-based row a [`CliError::BadRay`] is about.
+    #[cfg(test)]
+    pub fn row(&self) -> Option<usize> {
+        match self {
+            CliError::BadRay { row, .. } => Some(*row),
+            _ => None,
+        }
+    }
+}
+
+fn shape_text(shape: &[u64]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => {
+            let parts: Vec<String> = shape.iter().map(u64::to_string).collect();
+            format!("({})", parts.join(", "))
+        }
+    }
+}
+
+fn row_text(v: &[f32; 8]) -> String {
+    format!(
+        "origin=({}, {}, {}) tmin={} dir=({}, {}, {}) tmax={}",
+        v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    )
+}
+
+/// The ray of one row `ox oy oz tmin dx dy dz tmax`.
+pub fn ray_from_row(r: &[f32; 8]) -> Ray {
+    Ray {
+        origin: [r[0], r[1], r[2]],
+        tmin: r[3],
+        dir: [r[4], r[5], r[6]],
+        tmax: r[7],
+    }
+}
+
+/// The row `ox oy oz tmin dx dy dz tmax` of a ray.
+pub fn row_from_ray(r: &Ray) -> [f32; 8] {
+    [
+        r.origin[0],
+        r.origin[1],
+        r.origin[2],
+        r.tmin,
+        r.dir[0],
+        r.dir[1],
+        r.dir[2],
+        r.tmax,
+    ]
+}
+
+/// Reads and validates a rays file.
+pub fn read_rays(path: &Path) -> Result<Vec<Ray>, CliError> {
+    let file = File::open(path).map_err(|source| CliError::Open {
+        path: path.to_owned(),
+        source,
+    })?;
+    read_rays_from(BufReader::new(file), path)
+}
+
+/// Reads and validates rays from `reader`; `path` only names the source in errors.
+pub fn read_rays_from(reader: impl Read, path: &Path) -> Result<Vec<Ray>, CliError> {
+    let data = read_f32_matrix(reader, path, RAY_COLUMNS)?;
+    let mut rays = Vec::with_capacity(data.len() / RAY_COLUMNS as usize);
+    for (row, chunk) in data.chunks_exact(RAY_COLUMNS as usize).enumerate() {
+        let mut values = [0.0f32; 8];
+        values.copy_from_slice(chunk);
+        let ray = ray_from_row(&values);
+        ray.validate().map_err(|problem| CliError::BadRay {
+            path: path.to_owned(),
+            row,
+            problem,
+            values,
+        })?;
+        rays.push(ray);
+    }
+    Ok(rays)
+}
+
+/// Reads a triangles file (used by the tests to read back `dirt triangles`).
+#[cfg(test)]
+pub fn read_triangles_from(reader: impl Read, path: &Path) -> Result<Vec<Triangle>, CliError> {
+    let data = read_f32_matrix(reader, path, TRIANGLE_COLUMNS)?;
+    Ok(data
+        .chunks_exact(TRIANGLE_COLUMNS as usize)
+        .map(|c| Triangle {
+            v: [[c[0], c[1], c[2]], [c[3], c[4], c[5]], [c[6], c[7], c[8]]],
+        })
+        .collect())
+}
+
+/// Reads a C-order float32 array of shape `(N, columns)` as a flat vector.
+fn read_f32_matrix(reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f32>, CliError> {
+    let npy = NpyFile::new(reader).map_err(|e| CliError::NotNpy {
+        path: path.to_owned(),
+        reason: e.to_string(),
+    })?;
+    let dtype = npy.dtype();
+    let is_f32 = matches!(&dtype, DType::Plain(ts) if ts.type_char() == TypeChar::Float && ts.size_field() == 4);
+    if !is_f32 {
+        return Err(CliError::DType {
+            path: path.to_owned(),
+            found: dtype_text(&dtype),
+        });
+    }
+    let shape = npy.shape().to_vec();
+    if shape.len() != 2 || shape[1] != columns {
+        return Err(CliError::Shape {
+            path: path.to_owned(),
+            found: shape,
+            columns,
+        });
+    }
+    if npy.order() == Order::Fortran {
+        return Err(CliError::FortranOrder {
+            path: path.to_owned(),
+        });
+    }
+    let data_err = |reason: String| CliError::Data {
+        path: path.to_owned(),
+        reason,
+    };
+    let expected = shape[0]
+        .checked_mul(columns)
+        .and_then(|n| usize::try_from(n).ok())
+        .ok_or_else(|| data_err(format!("{} rows is too many", shape[0])))?;
+    let reader = npy.data::<f32>().map_err(|e| data_err(e.to_string()))?;
+    // Do not trust the header's row count for the allocation: grow as data arrives.
+    let mut out = Vec::with_capacity(expected.min(1 << 24));
+    for value in reader {
+        out.push(value.map_err(|e| data_err(e.to_string()))?);
+    }
+    if out.len() != expected {
+        return Err(data_err(format!(
+            "expected {expected} values, found {}",
+            out.len()
+        )));
+    }
+    Ok(out)
+}
+
+fn dtype_text(dtype: &DType) -> String {
+    match dtype {
+        DType::Plain(ts) => {
+            let name = match (ts.type_char(), ts.size_field()) {
+                (TypeChar::Float, n) => format!("float{}", n * 8),
+                (TypeChar::Int, n) => format!("int{}", n * 8),
+                (TypeChar::Uint, n) => format!("uint{}", n * 8),
+                (TypeChar::Bool, _) => "bool".to_owned(),
+                _ => return format!("'{ts}'"),
+            };
+            format!("{name} ('{ts}')")
+        }
+        other => format!("a structured dtype {}", other.descr()),
+    }
+}
+
+/// Writes rays as float32 `(N, 8)`.
+pub fn write_rays(path: &Path, rays: &[Ray]) -> Result<(), CliError> {
+    write_file(path, |w| write_rays_to(w, rays))
+}
+
+/// Writes closest hits as uint32 `(N, 4)`; any miss is written as [`Hit::MISS`].
+pub fn write_hits(path: &Path, hits: &[Hit]) -> Result<(), CliError> {
+    write_file(path, |w| write_hits_to(w, hits))
+}
+
+/// Writes triangles as float32 `(T, 9)`.
+pub fn write_triangles(path: &Path, tris: &[Triangle]) -> Result<(), CliError> {
+    write_file(path, |w| write_triangles_to(w, tris))
+}
+
+fn write_file(
+    path: &Path,
+    body: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> Result<(), CliError> {
+    let write_err = |source| CliError::Write {
+        path: path.to_owned(),
+        source,
+    };
+    let file = File::create(path).map_err(write_err)?;
+    let mut w = BufWriter::new(file);
+    body(&mut w).map_err(write_err)?;
+    w.flush().map_err(write_err)
+}
+
+pub fn write_rays_to(w: impl Write, rays: &[Ray]) -> io::Result<()> {
+    write_matrix::<f32>(
+        w,
+        RAY_COLUMNS,
+        rays.len(),
+        rays.iter().flat_map(row_from_ray),
+    )
+}
+
+pub fn write_hits_to(w: impl Write, hits: &[Hit]) -> io::Result<()> {
+    let words = hits.iter().flat_map(|h| {
+        if h.is_hit() {
+            h.bits()
+        } else {
+            Hit::MISS.bits()
+        }
+    });
+    write_matrix::<u32>(w, HIT_COLUMNS, hits.len(), words)
+}
+
+pub fn write_triangles_to(w: impl Write, tris: &[Triangle]) -> io::Result<()> {
+    write_matrix::<f32>(
+        w,
+        TRIANGLE_COLUMNS,
+        tris.len(),
+        tris.iter().flat_map(|t| t.v.into_iter().flatten()),
+    )
+}
+
+fn write_matrix<T: npyz::AutoSerialize>(
+    w: impl Write,
+    columns: u64,
+    rows: usize,
+    values: impl IntoIterator<Item = T>,
+) -> io::Result<()> {
+    let mut writer = WriteOptions::<T>::new()
+        .default_dtype()
+        .shape(&[rows as u64, columns])
+        .writer(w)
+        .begin_nd()?;
+    writer.extend(values)?;
+    writer.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    fn name() -> &'static Path {
+        Path::new("test.npy")
+    }
+
+    fn good_rays() -> Vec<Ray> {
+        vec![
+            Ray {
+                origin: [0.0, 1.0, 2.0],
+                tmin: 0.0,
+                dir: [0.0, 0.0, 1.0],
+                tmax: f32::INFINITY,
+            },
+            Ray {
+                origin: [-3.5, 1e-30, 7.0],
+                tmin: 0.25,
+                dir: [1.0, -2.0, 0.5],
+                tmax: 10.0,
+            },
+            Ray {
+                origin: [1.0, 1.0, 1.0],
+                tmin: 1.0,
+                dir: [0.0, -1e-20, 0.0],
+                tmax: 1.0,
+            },
+        ]
+    }
+
+    /// An `.npy` file (format 1.0) with any dtype, shape and order, written by
+    /// hand so the tests do not depend on what the writer is willing to produce.
+    fn raw_npy(descr: &str, shape: &[u64], fortran: bool, data: &[u8]) -> Vec<u8> {
+        let shape_text = match shape {
+            [n] => format!("({n},)"),
+            _ => format!(
+                "({})",
+                shape
+                    .iter()
+                    .map(u64::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        let order = if fortran { "True" } else { "False" };
+        let mut dict =
+            format!("{{'descr': '{descr}', 'fortran_order': {order}, 'shape': {shape_text}, }}");
+        while (10 + dict.len() + 1) % 64 != 0 {
+            dict.push(' ');
+        }
+        dict.push('\n');
+        let mut out = b"\x93NUMPY\x01\x00".to_vec();
+        out.extend_from_slice(
+            &u16::try_from(dict.len())
+                .expect("short header")
+                .to_le_bytes(),
+        );
+        out.extend_from_slice(dict.as_bytes());
+        out.extend_from_slice(data);
+        out
+    }
+
+    fn f32_bytes(values: &[f32], big_endian: bool) -> Vec<u8> {
+        values
+            .iter()
+            .flat_map(|v| {
+                if big_endian {
+                    v.to_be_bytes()
+                } else {
+                    v.to_le_bytes()
+                }
+            })
+            .collect()
+    }
+
+    fn f32_file(rows: &[[f32; 8]]) -> Vec<u8> {
+        let mut out = Vec::new();
+        write_matrix::<f32>(&mut out, 8, rows.len(), rows.iter().flatten().copied())
+            .expect("write");
+        out
+    }
+
+    fn read(bytes: &[u8]) -> Result<Vec<Ray>, CliError> {
+        read_rays_from(bytes, name())
+    }
+
+    #[test]
+    fn rays_round_trip_bit_exactly() {
+        let rays = good_rays();
+        let mut bytes = Vec::new();
+        write_rays_to(&mut bytes, &rays).expect("write");
+        let back = read(&bytes).expect("read");
+        assert_eq!(back.len(), rays.len());
+        for (a, b) in rays.iter().zip(&back) {
+            assert_eq!(bytemuck::bytes_of(a), bytemuck::bytes_of(b));
+        }
+    }
+
+    #[test]
+    fn header_says_float32_c_order_n_by_8() {
+        let mut bytes = Vec::new();
+        write_rays_to(&mut bytes, &good_rays()).expect("write");
+        let npy = NpyFile::new(&bytes[..]).expect("header");
+        assert_eq!(npy.shape(), &[3, 8]);
+        assert_eq!(npy.order(), Order::C);
+        assert_eq!(npy.dtype().descr(), "'<f4'");
+    }
+
+    #[test]
+    fn empty_rays_file_is_fine() {
+        let mut bytes = Vec::new();
+        write_rays_to(&mut bytes, &[]).expect("write");
+        assert!(read(&bytes).expect("read").is_empty());
+    }
+
+    #[test]
+    fn hits_are_written_as_u32_words() {
+        let hits = [
+            Hit {
+                prim: 7,
+                t: 1.5,
+                u: 0.25,
+                v: 0.5,
+            },
+            Hit::MISS,
+            // A miss with stray fields is normalised to Hit::MISS.
+            Hit {
+                prim: dirt_math::INVALID_ID,
+                t: 3.0,
+                u: 1.0,
+                v: 1.0,
+            },
+        ];
+        let mut bytes = Vec::new();
+        write_hits_to(&mut bytes, &hits).expect("write");
+        let npy = NpyFile::new(&bytes[..]).expect("header");
+        assert_eq!(npy.shape(), &[3, 4]);
+        assert_eq!(npy.dtype().descr(), "'<u4'");
+        let words: Vec<u32> = npy.into_vec().expect("data");
+        assert_eq!(&words[0..4], &hits[0].bits());
+        assert_eq!(&words[4..8], &[u32::MAX, f32::INFINITY.to_bits(), 0, 0]);
+        assert_eq!(&words[8..12], &Hit::MISS.bits());
+    }
+
+    #[test]
+    fn triangles_round_trip() {
+        let tris = vec![
+            Triangle {
+                v: [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0], [6.0, 7.0, 8.0]],
+            },
+            Triangle {
+                v: [[-1.0, 0.5, 1e-7], [9.0, 9.5, 10.0], [-0.0, 2.0, 3.0]],
+            },
+        ];
+        let mut bytes = Vec::new();
+        write_triangles_to(&mut bytes, &tris).expect("write");
+        let npy = NpyFile::new(&bytes[..]).expect("header");
+        assert_eq!(npy.shape(), &[2, 9]);
+        let flat: Vec<f32> = npy.into_vec().expect("data");
+        assert_eq!(flat[3..6], [3.0, 4.0, 5.0]);
+        let back = read_triangles_from(&bytes[..], name()).expect("read");
+        assert_eq!(back, tris);
+    }
+
+    #[test]
+    fn not_an_npy_file() {
+        let err = read(b"ox oy oz tmin dx dy dz tmax\n0 0 0 0 0 0 1 1\n").expect_err("text");
+        assert!(matches!(err, CliError::NotNpy { .. }), "{err}");
+        assert!(err.to_string().contains("not a .npy file"), "{err}");
+        let err = read(b"").expect_err("empty");
+        assert!(matches!(err, CliError::NotNpy { .. }), "{err}");
+    }
+
+    #[test]
+    fn wrong_dtype() {
+        for (dtype, word) in [
+            ("<f8", "float64"),
+            ("<i4", "int32"),
+            ("<u4", "uint32"),
+            ("<f2", "float16"),
+        ] {
+            let err = read(&raw_npy(dtype, &[2, 8], false, &[0u8; 16 * 8])).expect_err(dtype);
+            assert!(matches!(err, CliError::DType { .. }), "{dtype}: {err}");
+            assert!(err.to_string().contains(word), "{err}");
+            assert!(err.to_string().contains("expected float32"), "{err}");
+        }
+    }
+
+    #[test]
+    fn big_endian_float32_is_accepted() {
+        let row = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 2.0];
+        let rays =
+            read(&raw_npy(">f4", &[1, 8], false, &f32_bytes(&row, true))).expect("big endian");
+        assert_eq!(rays[0].dir, [0.0, 0.0, 1.0]);
+        assert_eq!(rays[0].tmax, 2.0);
+    }
+
+    #[test]
+    fn wrong_shape() {
+        for shape in [vec![3, 7], vec![24], vec![3, 8, 1], vec![8, 3], vec![]] {
+            let n: u64 = shape.iter().product();
+            let err = read(&raw_npy(
+                "<f4",
+                &shape,
+                false,
+                &f32_bytes(&vec![1.0; n as usize], false),
+            ))
+            .expect_err("shape");
+            match &err {
+                CliError::Shape { found, columns, .. } => {
+                    assert_eq!(found, &shape);
+                    assert_eq!(*columns, 8);
+                }
+                other => panic!("{shape:?}: {other}"),
+            }
+            assert!(err.to_string().contains("expected (N, 8)"), "{err}");
+        }
+        let err =
+            read(&raw_npy("<f4", &[24], false, &f32_bytes(&[1.0; 24], false))).expect_err("1-D");
+        assert!(err.to_string().contains("shape is (24,)"), "{err}");
+    }
+
+    #[test]
+    fn fortran_order_is_refused_with_a_hint() {
+        let err = read(&raw_npy(
+            "<f4",
+            &[2, 8],
+            true,
+            &f32_bytes(&[1.0; 16], false),
+        ))
+        .expect_err("fortran");
+        assert!(matches!(err, CliError::FortranOrder { .. }), "{err}");
+        assert!(err.to_string().contains("C order"), "{err}");
+    }
+
+    #[test]
+    fn truncated_data() {
+        let mut bytes = f32_file(&[[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]; 4]);
+        bytes.truncate(bytes.len() - 6);
+        let err = read(&bytes).expect_err("truncated");
+        assert!(matches!(err, CliError::Data { .. }), "{err}");
+    }
+
+    /// Each malformed ray, placed at row 2 after two good rows, with the problem it must report.
+    #[test]
+    fn bad_rays_name_the_problem_and_the_row() {
+        let good = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 5.0];
+        let nan = f32::NAN;
+        let inf = f32::INFINITY;
+        let cases: [([f32; 8], RayProblem, &str); 10] = [
+            (
+                [nan, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 5.0],
+                RayProblem::NonFiniteOrigin,
+                "origin is not finite",
+            ),
+            (
+                [0.0, inf, 0.0, 0.0, 0.0, 0.0, 1.0, 5.0],
+                RayProblem::NonFiniteOrigin,
+                "origin is not finite",
+            ),
+            (
+                [0.0, 0.0, 0.0, 0.0, 0.0, -inf, 1.0, 5.0],
+                RayProblem::NonFiniteDirection,
+                "direction is not finite",
+            ),
+            (
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, nan, 5.0],
+                RayProblem::NonFiniteDirection,
+                "direction is not finite",
+            ),
+            (
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0],
+                RayProblem::ZeroDirection,
+                "direction is zero",
+            ),
+            (
+                [0.0, 0.0, 0.0, 0.0, -0.0, 0.0, 0.0, 5.0],
+                RayProblem::ZeroDirection,
+                "direction is zero",
+            ),
+            (
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, nan],
+                RayProblem::NanRange,
+                "NaN",
+            ),
+            (
+                [0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 5.0],
+                RayProblem::BadTmin,
+                "tmin",
+            ),
+            (
+                [0.0, 0.0, 0.0, inf, 0.0, 0.0, 1.0, inf],
+                RayProblem::BadTmin,
+                "tmin",
+            ),
+            (
+                [0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 1.0, 1.0],
+                RayProblem::EmptyRange,
+                "tmax < tmin",
+            ),
+        ];
+        for (bad, problem, words) in cases {
+            let err = read(&f32_file(&[good, good, bad, good])).expect_err("bad ray");
+            match &err {
+                CliError::BadRay {
+                    row, problem: p, ..
+                } => {
+                    assert_eq!(*row, 2, "{err}");
+                    assert_eq!(*p, problem, "{err}");
+                }
+                other => panic!("{bad:?}: {other}"),
+            }
+            assert_eq!(err.row(), Some(2));
+            let msg = err.to_string();
+            assert!(msg.contains("row 2:"), "{msg}");
+            assert!(msg.contains(words), "{msg}");
+            assert!(msg.starts_with("test.npy"), "{msg}");
+        }
+    }
+
+    #[test]
+    fn the_first_bad_row_is_reported() {
+        let good = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 5.0];
+        let zero_dir = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0];
+        let mut rows = vec![good; 10];
+        rows[7] = zero_dir;
+        rows[9] = zero_dir;
+        let err = read(&f32_file(&rows)).expect_err("bad");
+        assert_eq!(err.row(), Some(7), "{err}");
+    }
+
+    #[test]
+    fn unbounded_and_point_rays_are_valid() {
+        // tmax = +inf and tmin == tmax are legal (Ray::validate).
+        let rows = [
+            [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, f32::INFINITY],
+            [0.0, 0.0, 0.0, 3.0, 1.0, 0.0, 0.0, 3.0],
+        ];
+        assert_eq!(read(&f32_file(&rows)).expect("valid").len(), 2);
+    }
+}

@@ -1,0 +1,538 @@
+//! The `dirt` command line end to end, on the built-in scene `cornell`.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const DIRT: &str = env!("CARGO_BIN_EXE_dirt");
+const SCENE: &str = "cornell";
+
+/// A fresh directory for one test, removed when the test passes.
+struct TestDir(PathBuf);
+
+impl TestDir {
+    fn new(name: &str) -> TestDir {
+        let dir = std::env::temp_dir().join(format!("dirt-cli-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).expect("create test dir");
+        TestDir(dir)
+    }
+    fn path(&self, file: &str) -> PathBuf {
+        self.0.join(file)
+    }
+}
+
+impl Drop for TestDir {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+fn dirt(args: &[&str]) -> Output {
+    Command::new(DIRT).args(args).output().expect("run dirt")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Runs dirt and requires success; returns stdout and stderr.
+fn dirt_ok(args: &[&str]) -> (String, String) {
+    let out = dirt(args);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(
+        out.status.success(),
+        "dirt {args:?} failed ({}):\n{stderr}",
+        out.status
+    );
+    (stdout, stderr)
+}
+
+/// Runs dirt and requires failure; returns stderr.
+fn dirt_err(args: &[&str]) -> String {
+    let out = dirt(args);
+    let stderr = text(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "dirt {args:?} should fail:\n{}{stderr}",
+        text(&out.stdout)
+    );
+    assert_ne!(
+        out.status.code(),
+        Some(101),
+        "dirt {args:?} panicked:\n{stderr}"
+    );
+    stderr
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+/// Shape and dtype descr of an .npy file.
+fn npy_header(path: &Path) -> (Vec<u64>, String) {
+    let bytes = fs::read(path).expect("read npy");
+    let npy = npyz::NpyFile::new(&bytes[..]).expect("npy header");
+    (npy.shape().to_vec(), npy.dtype().descr())
+}
+
+fn triangle_count() -> usize {
+    dirt_scene::open(SCENE)
+        .expect("built-in scene")
+        .triangles
+        .len()
+}
+
+/// An .npy file (format 1.0) written by hand: any dtype, shape, order and data.
+fn raw_npy(descr: &str, shape: &[u64], fortran: bool, data: &[u8]) -> Vec<u8> {
+    let dims: Vec<String> = shape.iter().map(u64::to_string).collect();
+    let shape_text = if shape.len() == 1 {
+        format!("({},)", dims[0])
+    } else {
+        format!("({})", dims.join(", "))
+    };
+    let order = if fortran { "True" } else { "False" };
+    let mut dict =
+        format!("{{'descr': '{descr}', 'fortran_order': {order}, 'shape': {shape_text}, }}");
+    while (10 + dict.len() + 1) % 64 != 0 {
+        dict.push(' ');
+    }
+    dict.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(
+        &u16::try_from(dict.len())
+            .expect("short header")
+            .to_le_bytes(),
+    );
+    out.extend_from_slice(dict.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+fn rays_npy(rows: &[[f32; 8]]) -> Vec<u8> {
+    let data: Vec<u8> = rows
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    raw_npy("<f4", &[rows.len() as u64, 8], false, &data)
+}
+
+/// `dirt rays`, `dirt trace --backend cpu` and `--backend brute` on the same
+/// rays: the hit files must be byte-identical (DIRT's exactness claim).
+#[test]
+fn cpu_hits_equal_brute_force_hits_byte_for_byte() {
+    let dir = TestDir::new("exact");
+    let (rays, cpu, brute) = (
+        dir.path("rays.npy"),
+        dir.path("cpu.npy"),
+        dir.path("brute.npy"),
+    );
+    dirt_ok(&[
+        "rays",
+        SCENE,
+        "--out",
+        s(&rays),
+        "--count",
+        "20000",
+        "--seed",
+        "7",
+    ]);
+    assert_eq!(npy_header(&rays), (vec![20000, 8], "'<f4'".to_owned()));
+
+    let (_, log) = dirt_ok(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&cpu),
+        "--backend",
+        "cpu",
+    ]);
+    let count = format!("{} triangles", triangle_count());
+    for word in [count.as_str(), "build:", "trace:", "Mrays/s", "hits:"] {
+        assert!(log.contains(word), "trace log lacks {word:?}:\n{log}");
+    }
+    dirt_ok(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&brute),
+        "--backend",
+        "brute",
+    ]);
+    assert_eq!(npy_header(&cpu), (vec![20000, 4], "'<u4'".to_owned()));
+
+    let (a, b) = (
+        fs::read(&cpu).expect("cpu hits"),
+        fs::read(&brute).expect("brute hits"),
+    );
+    assert_eq!(a.len(), b.len());
+    if a != b {
+        let words = |bytes: &[u8]| -> Vec<u32> {
+            let npy = npyz::NpyFile::new(bytes).expect("npy");
+            npy.into_vec().expect("u32 data")
+        };
+        let (wa, wb) = (words(&a), words(&b));
+        let differing: Vec<usize> = (0..wa.len() / 4)
+            .filter(|&r| wa[4 * r..4 * r + 4] != wb[4 * r..4 * r + 4])
+            .collect();
+        let r = differing[0];
+        panic!(
+            "{} of 20000 rays differ; first row {r}: cpu {:08x?}, brute {:08x?}",
+            differing.len(),
+            &wa[4 * r..4 * r + 4],
+            &wb[4 * r..4 * r + 4]
+        );
+    }
+
+    // Some rays hit, some miss.
+    let words: Vec<u32> = npyz::NpyFile::new(&a[..])
+        .expect("npy")
+        .into_vec()
+        .expect("data");
+    let hits = words.chunks_exact(4).filter(|h| h[0] != u32::MAX).count();
+    assert!(hits > 1000 && hits < 20000, "{hits} hits");
+}
+
+#[test]
+fn other_traversal_and_views_agree_with_brute_force() {
+    let dir = TestDir::new("variants");
+    let (rays, brute) = (dir.path("rays.npy"), dir.path("brute.npy"));
+    dirt_ok(&[
+        "rays",
+        SCENE,
+        "--out",
+        s(&rays),
+        "--count",
+        "3000",
+        "--seed",
+        "11",
+    ]);
+    dirt_ok(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&brute),
+        "--backend",
+        "brute",
+    ]);
+    let truth = fs::read(&brute).expect("brute hits");
+    let variants: [&[&str]; 3] = [
+        &["--traversal", "hiz"],
+        &[
+            "--views",
+            "single",
+            "--resolution",
+            "64",
+            "--buckets",
+            "4",
+            "--tile",
+            "2",
+        ],
+        &["--center", "0.3,1.2,-0.4", "--resolution", "32"],
+    ];
+    for (i, extra) in variants.iter().enumerate() {
+        let out = dir.path(&format!("cpu{i}.npy"));
+        let mut args = vec!["trace", SCENE, "--rays", s(&rays), "--out", s(&out)];
+        args.extend_from_slice(extra);
+        dirt_ok(&args);
+        assert!(
+            fs::read(&out).expect("hits") == truth,
+            "{extra:?}: hits differ from brute force"
+        );
+    }
+}
+
+/// The independent float64 check of `tests/python/check_hits.py`, when
+/// Debian's python3 with numpy is present (it must be under CI).
+#[test]
+fn numpy_check_accepts_the_hits() {
+    let python = Path::new("/usr/bin/python3");
+    let has_numpy = python.exists()
+        && Command::new(python)
+            .args(["-c", "import numpy"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+    if !has_numpy {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must provide /usr/bin/python3 with numpy (python3-numpy)"
+        );
+        eprintln!("skipped: /usr/bin/python3 with numpy not found (apt-get install python3-numpy)");
+        return;
+    }
+    let dir = TestDir::new("numpy");
+    let (tris, rays, hits) = (
+        dir.path("tris.npy"),
+        dir.path("rays.npy"),
+        dir.path("hits.npy"),
+    );
+    dirt_ok(&["triangles", SCENE, "--out", s(&tris)]);
+    dirt_ok(&[
+        "rays",
+        SCENE,
+        "--out",
+        s(&rays),
+        "--count",
+        "5000",
+        "--seed",
+        "13",
+    ]);
+    dirt_ok(&["trace", SCENE, "--rays", s(&rays), "--out", s(&hits)]);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/python/check_hits.py");
+    let out = Command::new(python)
+        .arg(&script)
+        .args([&tris, &rays, &hits])
+        .output()
+        .expect("run check_hits.py");
+    let report = format!("{}{}", text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "check_hits.py failed:\n{report}");
+    assert!(report.contains("5000 passed, 0 failed"), "{report}");
+}
+
+#[test]
+fn rays_are_deterministic_for_a_seed() {
+    let dir = TestDir::new("seed");
+    let (a, b, c) = (dir.path("a.npy"), dir.path("b.npy"), dir.path("c.npy"));
+    for kind in ["mixed", "camera", "random", "inside"] {
+        dirt_ok(&[
+            "rays",
+            SCENE,
+            "--out",
+            s(&a),
+            "--count",
+            "500",
+            "--seed",
+            "1",
+            "--kind",
+            kind,
+        ]);
+        dirt_ok(&[
+            "rays",
+            SCENE,
+            "--out",
+            s(&b),
+            "--count",
+            "500",
+            "--seed",
+            "1",
+            "--kind",
+            kind,
+        ]);
+        dirt_ok(&[
+            "rays",
+            SCENE,
+            "--out",
+            s(&c),
+            "--count",
+            "500",
+            "--seed",
+            "2",
+            "--kind",
+            kind,
+        ]);
+        let (a, b, c) = (
+            fs::read(&a).expect("a"),
+            fs::read(&b).expect("b"),
+            fs::read(&c).expect("c"),
+        );
+        assert!(a == b, "{kind}: same seed, different rays");
+        assert!(a != c, "{kind}: different seeds, same rays");
+    }
+}
+
+#[test]
+fn triangles_file_has_one_row_per_triangle() {
+    let dir = TestDir::new("tris");
+    let out = dir.path("tris.npy");
+    dirt_ok(&["triangles", SCENE, "--out", s(&out)]);
+    let scene = dirt_scene::open(SCENE).expect("scene");
+    assert_eq!(
+        npy_header(&out),
+        (vec![scene.triangles.len() as u64, 9], "'<f4'".to_owned())
+    );
+    let bytes = fs::read(&out).expect("read");
+    let flat: Vec<f32> = npyz::NpyFile::new(&bytes[..])
+        .expect("npy")
+        .into_vec()
+        .expect("data");
+    let expected: Vec<f32> = scene
+        .triangles
+        .iter()
+        .flat_map(|t| t.v.into_iter().flatten())
+        .collect();
+    assert!(
+        flat.iter()
+            .map(|f| f.to_bits())
+            .eq(expected.iter().map(|f| f.to_bits()))
+    );
+}
+
+#[test]
+fn info_reports_the_triangle_count_and_the_structure() {
+    let (stdout, _) = dirt_ok(&["info", SCENE]);
+    let n = triangle_count();
+    assert!(stdout.contains(&format!("triangles: {n}")), "{stdout}");
+    for word in ["bounds:", "stats:", "memory:"] {
+        assert!(stdout.contains(word), "info lacks {word:?}:\n{stdout}");
+    }
+    let (stdout, _) = dirt_ok(&[
+        "info",
+        SCENE,
+        "--views",
+        "single",
+        "--buckets",
+        "4",
+        "--center",
+        "0,1,0",
+    ]);
+    assert!(stdout.contains(&format!("triangles: {n}")), "{stdout}");
+}
+
+#[test]
+fn malformed_rays_files_are_refused_with_the_reason() {
+    let dir = TestDir::new("malformed");
+    let hits = dir.path("hits.npy");
+    let good = [0.0, 1.0, 0.5, 0.0, 0.0, 0.0, -1.0, f32::INFINITY];
+    let with_bad_row = |row: usize, bad: [f32; 8]| {
+        let mut rows = vec![good; 6];
+        rows[row] = bad;
+        rays_npy(&rows)
+    };
+    let f32s = |n: usize| -> Vec<u8> { (0..n).flat_map(|i| (i as f32).to_le_bytes()).collect() };
+    let cases: Vec<(&str, Vec<u8>, Vec<&str>)> = vec![
+        (
+            "text",
+            b"0 0 0 0 0 0 1 1\n".to_vec(),
+            vec!["not a .npy file"],
+        ),
+        ("empty", Vec::new(), vec!["not a .npy file"]),
+        (
+            "float64",
+            raw_npy("<f8", &[2, 8], false, &[0u8; 128]),
+            vec!["float64", "expected float32"],
+        ),
+        (
+            "int32",
+            raw_npy("<i4", &[2, 8], false, &[0u8; 64]),
+            vec!["int32", "expected float32"],
+        ),
+        (
+            "seven",
+            raw_npy("<f4", &[3, 7], false, &f32s(21)),
+            vec!["(3, 7)", "expected (N, 8)"],
+        ),
+        (
+            "flat",
+            raw_npy("<f4", &[16], false, &f32s(16)),
+            vec!["(16,)", "expected (N, 8)"],
+        ),
+        (
+            "fortran",
+            raw_npy("<f4", &[2, 8], true, &f32s(16)),
+            vec!["Fortran order", "C order"],
+        ),
+        (
+            "truncated",
+            raw_npy("<f4", &[4, 8], false, &f32s(20)),
+            vec!["truncated"],
+        ),
+        (
+            "nan",
+            with_bad_row(3, [f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]),
+            vec!["row 3:", "origin is not finite"],
+        ),
+        (
+            "inf_dir",
+            with_bad_row(4, [0.0, 0.0, 0.0, 0.0, f32::INFINITY, 0.0, 1.0, 1.0]),
+            vec!["row 4:", "direction"],
+        ),
+        (
+            "zero_dir",
+            with_bad_row(5, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
+            vec!["row 5:", "direction is zero"],
+        ),
+        (
+            "tmax<tmin",
+            with_bad_row(2, [0.0, 1.0, 0.0, 2.0, 0.0, 0.0, 1.0, 1.0]),
+            vec!["row 2:", "tmax < tmin"],
+        ),
+        (
+            "neg_tmin",
+            with_bad_row(1, [0.0, 1.0, 0.0, -0.5, 0.0, 0.0, 1.0, 1.0]),
+            vec!["row 1:", "tmin"],
+        ),
+        (
+            "nan_tmax",
+            with_bad_row(0, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, f32::NAN]),
+            vec!["row 0:", "NaN"],
+        ),
+    ];
+    for (name, bytes, words) in cases {
+        let rays = dir.path(&format!("{name}.npy"));
+        fs::write(&rays, bytes).expect("write rays");
+        for backend in ["cpu", "brute"] {
+            let stderr = dirt_err(&[
+                "trace",
+                SCENE,
+                "--rays",
+                s(&rays),
+                "--out",
+                s(&hits),
+                "--backend",
+                backend,
+            ]);
+            assert!(
+                stderr.contains(s(&rays)),
+                "{name}: message does not name the file:\n{stderr}"
+            );
+            for word in &words {
+                assert!(
+                    stderr.contains(word),
+                    "{name}: message lacks {word:?}:\n{stderr}"
+                );
+            }
+        }
+    }
+    assert!(!hits.exists(), "no hits file is written for bad rays");
+    let missing = dir.path("missing.npy");
+    let stderr = dirt_err(&["trace", SCENE, "--rays", s(&missing), "--out", s(&hits)]);
+    assert!(
+        stderr.contains("cannot open") && stderr.contains("missing.npy"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn bad_arguments_are_refused_with_the_reason() {
+    let stderr = dirt_err(&["info", SCENE, "--center", "1,2"]);
+    assert!(stderr.contains("X,Y,Z"), "{stderr}");
+    let stderr = dirt_err(&["info", SCENE, "--center", "1,two,3"]);
+    assert!(stderr.contains("Y = \"two\" is not a number"), "{stderr}");
+    let stderr = dirt_err(&["info", "no-such-scene"]);
+    assert!(stderr.contains("no-such-scene"), "{stderr}");
+    let stderr = dirt_err(&[
+        "trace",
+        SCENE,
+        "--rays",
+        "r.npy",
+        "--out",
+        "h.npy",
+        "--backend",
+        "quantum",
+    ]);
+    assert!(
+        stderr.contains("cpu") && stderr.contains("brute"),
+        "{stderr}"
+    );
+    let stderr = dirt_err(&["rays", SCENE, "--out", "r.npy", "--kind", "sideways"]);
+    assert!(stderr.contains("mixed"), "{stderr}");
+}
