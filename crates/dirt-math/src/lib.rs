@@ -12,6 +12,7 @@
 pub mod bucket;
 pub mod clip;
 pub mod dda;
+pub mod divide;
 pub mod encode;
 pub mod num;
 pub mod triangle;
