@@ -299,3 +299,37 @@ pub fn grid(n: u32, size: f32, z0: f32) -> Vec<Triangle> {
     }
     out
 }
+
+/// The shared GPU of the GPU tests, or `None` (said loudly) when no adapter
+/// exists. With `DIRT_REQUIRE_GPU=1` (set by `.ci/run`) a missing adapter, or
+/// one that is not lavapipe, fails instead.
+pub fn gpu() -> Option<&'static dirt_gpu::Gpu> {
+    use std::sync::OnceLock;
+    static GPU: OnceLock<Option<dirt_gpu::Gpu>> = OnceLock::new();
+    let required = std::env::var("DIRT_REQUIRE_GPU").is_ok_and(|v| v == "1");
+    let g = GPU.get_or_init(|| match dirt_gpu::Gpu::new() {
+        Ok(g) => Some(g),
+        Err(e) => {
+            assert!(!required, "DIRT_REQUIRE_GPU=1 but: {e}");
+            eprintln!("\n*** SKIPPING GPU TEST: {e} ***\n");
+            None
+        }
+    });
+    if let Some(g) = g {
+        // Bits are only promised on the CI device.
+        if !g.is_llvmpipe() || !g.exact {
+            assert!(
+                !required,
+                "DIRT_REQUIRE_GPU=1 but the adapter is {} (NoContraction path: {}), not llvmpipe with it",
+                g.describe(),
+                g.exact
+            );
+            eprintln!(
+                "\n*** SKIPPING BIT-EXACT GPU TEST: adapter {} is not llvmpipe with the NoContraction path ***\n",
+                g.describe()
+            );
+            return None;
+        }
+    }
+    g.as_ref()
+}

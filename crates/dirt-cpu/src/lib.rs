@@ -138,7 +138,10 @@ pub fn views_for(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CpuEr
     }
     let mut bounds = Aabb::of_triangles(tris);
     if bounds.is_empty() {
-        bounds = Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
+        bounds = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
     }
     let tiles = params.tiles();
     Ok(match params.views {

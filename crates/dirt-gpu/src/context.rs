@@ -10,6 +10,8 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
+    /// Shaders compiled with NoContraction (see [`crate::spirv`]): the CPU's bits are promised.
+    pub exact: bool,
     pub(crate) pipelines: crate::Pipelines,
 }
 
@@ -20,10 +22,12 @@ impl Gpu {
     }
 
     async fn new_async() -> Result<Gpu, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = instance
             .request_adapter(&wgpu::RequestAdapterOptions {
-                power_preference: wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance),
+                power_preference: wgpu::PowerPreference::from_env()
+                    .unwrap_or(wgpu::PowerPreference::HighPerformance),
                 force_fallback_adapter: false,
                 compatible_surface: None,
                 apply_limit_buckets: false,
@@ -32,30 +36,48 @@ impl Gpu {
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
         let info = adapter.get_info();
         let supported = adapter.limits();
-        // WebGPU's defaults, widened only where the adapter allows and dirt needs:
-        // large storage buffers and 9 storage buffers in the trace (rays, hits,
-        // triangles, Hi-Z, offsets, ids, statistics).
-        let mut limits = wgpu::Limits::default();
-        limits.max_storage_buffer_binding_size = supported.max_storage_buffer_binding_size;
-        limits.max_buffer_size = supported.max_buffer_size;
-        limits.max_storage_buffers_per_shader_stage = supported.max_storage_buffers_per_shader_stage.min(16);
-        limits.max_compute_workgroups_per_dimension = supported.max_compute_workgroups_per_dimension;
+        // WebGPU's defaults (at most 8 storage buffers per stage: the trace uses 7),
+        // widened only where dirt needs it and the adapter allows: large buffers
+        // and dispatch grids.
+        let limits = wgpu::Limits {
+            max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
+            max_buffer_size: supported.max_buffer_size,
+            max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
+            ..Default::default()
+        };
+        // NoContraction SPIR-V needs passthrough shaders (Vulkan); elsewhere WGSL goes through wgpu.
+        let passthrough_feature = adapter.features() & wgpu::Features::PASSTHROUGH_SHADERS;
+        // DIRT_GPU_WGSL=1 forces the plain WGSL path (to compare; no bits promised then).
+        let forced_wgsl = std::env::var("DIRT_GPU_WGSL").is_ok_and(|v| v == "1");
+        let exact = !forced_wgsl
+            && !passthrough_feature.is_empty()
+            && info.backend == wgpu::Backend::Vulkan;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("dirt"),
-                required_features: wgpu::Features::empty(),
+                required_features: passthrough_feature,
                 required_limits: limits.clone(),
                 ..Default::default()
             })
             .await
             .map_err(|e| GpuError::Device(e.to_string()))?;
-        let pipelines = crate::Pipelines::new(&device)?;
-        Ok(Gpu { device, queue, info, limits, pipelines })
+        let pipelines = crate::Pipelines::new(&device, exact)?;
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            limits,
+            pipelines,
+            exact,
+        })
     }
 
     /// The adapter in words, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`.
     pub fn describe(&self) -> String {
-        format!("{} ({:?}, {})", self.info.name, self.info.backend, self.info.driver_info)
+        format!(
+            "{} ({:?}, {})",
+            self.info.name, self.info.backend, self.info.driver_info
+        )
     }
 
     /// True on lavapipe, the software Vulkan device CI asserts bits on.
@@ -66,7 +88,10 @@ impl Gpu {
     /// Waits for all submitted work.
     pub fn wait(&self) -> Result<(), GpuError> {
         self.device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
             .map(|_| ())
             .map_err(|e| GpuError::Device(e.to_string()))
     }

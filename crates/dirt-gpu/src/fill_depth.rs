@@ -8,7 +8,12 @@ use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF};
 /// The Hi-Z buffer, every cell `[enc(+inf), enc(-inf)]` (empty).
 pub(crate) fn new_hiz_buffer(gpu: &Gpu, cells: u64) -> Result<wgpu::Buffer, GpuError> {
     let init: Vec<[u32; 2]> = vec![[ORDERED_POS_INF, ORDERED_NEG_INF]; cells as usize];
-    Ok(storage_init(gpu, "hi-z", bytemuck::cast_slice(&init), wgpu::BufferUsages::COPY_SRC))
+    Ok(storage_init(
+        gpu,
+        "hi-z",
+        bytemuck::cast_slice(&init),
+        wgpu::BufferUsages::COPY_SRC,
+    ))
 }
 
 /// A render target of one pixel per tile; nothing is written to it.
@@ -16,7 +21,11 @@ pub(crate) fn tile_target(gpu: &Gpu, tiles: u32) -> wgpu::TextureView {
     gpu.device
         .create_texture(&wgpu::TextureDescriptor {
             label: Some("tiles"),
-            size: wgpu::Extent3d { width: tiles, height: tiles, depth_or_array_layers: 1 },
+            size: wgpu::Extent3d {
+                width: tiles,
+                height: tiles,
+                depth_or_array_layers: 1,
+            },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -28,7 +37,12 @@ pub(crate) fn tile_target(gpu: &Gpu, tiles: u32) -> wgpu::TextureView {
 }
 
 /// Draws the coverage quads of every (view, triangle) with `pipeline` and `bind`.
-pub(crate) fn draw_coverage(gpu: &Gpu, pipeline: &wgpu::RenderPipeline, bind: &wgpu::BindGroup, build: &BuildParams) {
+pub(crate) fn draw_coverage(
+    gpu: &Gpu,
+    pipeline: &wgpu::RenderPipeline,
+    bind: &wgpu::BindGroup,
+    build: &BuildParams,
+) {
     let target = tile_target(gpu, build.tiles);
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     {
@@ -38,7 +52,10 @@ pub(crate) fn draw_coverage(gpu: &Gpu, pipeline: &wgpu::RenderPipeline, bind: &w
                 view: &target,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard },
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Discard,
+                },
             })],
             depth_stencil_attachment: None,
             timestamp_writes: None,
@@ -52,7 +69,14 @@ pub(crate) fn draw_coverage(gpu: &Gpu, pipeline: &wgpu::RenderPipeline, bind: &w
     gpu.queue.submit([enc.finish()]);
 }
 
-pub(crate) fn fill_depth(gpu: &Gpu, tris: &wgpu::Buffer, views: &wgpu::Buffer, build_uniform: &wgpu::Buffer, hiz: &wgpu::Buffer, build: &BuildParams) -> Result<(), GpuError> {
+pub(crate) fn fill_depth(
+    gpu: &Gpu,
+    tris: &wgpu::Buffer,
+    views: &wgpu::Buffer,
+    build_uniform: &wgpu::Buffer,
+    hiz: &wgpu::Buffer,
+    build: &BuildParams,
+) -> Result<(), GpuError> {
     if build.n_tris == 0 {
         return Ok(());
     }
@@ -61,10 +85,22 @@ pub(crate) fn fill_depth(gpu: &Gpu, tris: &wgpu::Buffer, views: &wgpu::Buffer, b
         label: Some("fill_depth"),
         layout: &p.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: tris.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: views.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: build_uniform.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 3, resource: hiz.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: tris.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: views.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: build_uniform.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: hiz.as_entire_binding(),
+            },
         ],
     });
     draw_coverage(gpu, p, &bind, build);

@@ -6,7 +6,9 @@
 //! before filling with [`GpuError::TooLarge`]. Mirrors `dirt_cpu::fill_primitives`.
 
 use crate::fill_depth::draw_coverage;
-use crate::{BuildParams, Gpu, GpuError, ScanParams, check_binding, read_back, storage_init, uniform_init};
+use crate::{
+    BuildParams, Gpu, GpuError, ScanParams, check_binding, read_back, storage_init, uniform_init,
+};
 
 const SCAN_BLOCK: u64 = 256;
 
@@ -28,8 +30,20 @@ fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
     let mut count = n;
     loop {
         let blocks = count.div_ceil(SCAN_BLOCK);
-        sums_of.push(storage_init(gpu, "scan sums", &vec![0u8; (blocks * 4) as usize], wgpu::BufferUsages::empty()));
-        levels.push((if levels.is_empty() { data.clone() } else { sums_of[sums_of.len() - 2].clone() }, count));
+        sums_of.push(storage_init(
+            gpu,
+            "scan sums",
+            &vec![0u8; (blocks * 4) as usize],
+            wgpu::BufferUsages::empty(),
+        ));
+        levels.push((
+            if levels.is_empty() {
+                data.clone()
+            } else {
+                sums_of[sums_of.len() - 2].clone()
+            },
+            count,
+        ));
         if blocks <= 1 {
             break;
         }
@@ -37,15 +51,35 @@ fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
     }
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     let mut keep = Vec::new();
-    let mut run = |enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, data: &wgpu::Buffer, sums: &wgpu::Buffer, n: u64| {
-        let u = uniform_init(gpu, "scan params", bytemuck::bytes_of(&ScanParams { n: n as u32, ..Default::default() }));
+    let mut run = |enc: &mut wgpu::CommandEncoder,
+                   pipeline: &wgpu::ComputePipeline,
+                   data: &wgpu::Buffer,
+                   sums: &wgpu::Buffer,
+                   n: u64| {
+        let u = uniform_init(
+            gpu,
+            "scan params",
+            bytemuck::bytes_of(&ScanParams {
+                n: n as u32,
+                ..Default::default()
+            }),
+        );
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scan"),
             layout: &pipeline.get_bind_group_layout(0),
             entries: &[
-                wgpu::BindGroupEntry { binding: 6, resource: data.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 7, resource: sums.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 8, resource: u.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: data.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: sums.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: u.as_entire_binding(),
+                },
             ],
         });
         let (x, y) = grid(gpu, n.div_ceil(SCAN_BLOCK));
@@ -67,33 +101,128 @@ fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
     gpu.wait()
 }
 
-fn coverage_bind(gpu: &Gpu, pipeline: &wgpu::RenderPipeline, bufs: &[(u32, &wgpu::Buffer)]) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = bufs.iter().map(|(b, buf)| wgpu::BindGroupEntry { binding: *b, resource: buf.as_entire_binding() }).collect();
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("fill_primitives"), layout: &pipeline.get_bind_group_layout(0), entries: &entries })
+fn coverage_bind(
+    gpu: &Gpu,
+    pipeline: &wgpu::RenderPipeline,
+    bufs: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = bufs
+        .iter()
+        .map(|(b, buf)| wgpu::BindGroupEntry {
+            binding: *b,
+            resource: buf.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("fill_primitives"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    })
 }
 
 /// Returns (offsets, ids, node count).
-pub(crate) fn fill_primitives(gpu: &Gpu, tris: &wgpu::Buffer, views: &wgpu::Buffer, build_uniform: &wgpu::Buffer, hiz: &wgpu::Buffer, build: &BuildParams, n_lists: u64) -> Result<(wgpu::Buffer, wgpu::Buffer, u32), GpuError> {
+pub(crate) fn fill_primitives(
+    gpu: &Gpu,
+    tris: &wgpu::Buffer,
+    views: &wgpu::Buffer,
+    build_uniform: &wgpu::Buffer,
+    hiz: &wgpu::Buffer,
+    build: &BuildParams,
+    n_lists: u64,
+) -> Result<(wgpu::Buffer, wgpu::Buffer, u32), GpuError> {
     // Counts, then (after the scan) offsets; one extra zero so offsets[n_lists] is the total.
-    let lists = storage_init(gpu, "lists", &vec![0u8; ((n_lists + 1) * 4) as usize], wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
+    let lists = storage_init(
+        gpu,
+        "lists",
+        &vec![0u8; ((n_lists + 1) * 4) as usize],
+        wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+    );
     if build.n_tris > 0 {
         let p = &gpu.pipelines.count;
-        let bind = coverage_bind(gpu, p, &[(0, tris), (1, views), (2, build_uniform), (3, hiz), (4, &lists)]);
+        let bind = coverage_bind(
+            gpu,
+            p,
+            &[
+                (0, tris),
+                (1, views),
+                (2, build_uniform),
+                (3, hiz),
+                (4, &lists),
+            ],
+        );
         draw_coverage(gpu, p, &bind, build);
     }
     scan(gpu, &lists, n_lists + 1)?;
     let total = bytemuck::pod_read_unaligned::<u32>(&read_back(gpu, &lists, n_lists * 4, 4)?);
     check_binding(gpu, "list ids", total as u64 * 4)?;
-    let ids = storage_init(gpu, "ids", &vec![0u8; total as usize * 4], wgpu::BufferUsages::COPY_SRC);
+    let ids = storage_init(
+        gpu,
+        "ids",
+        &vec![0u8; total as usize * 4],
+        wgpu::BufferUsages::COPY_SRC,
+    );
     if total > 0 {
-        let cursors = storage_init(gpu, "cursors", &vec![0u8; ((n_lists + 1) * 4) as usize], wgpu::BufferUsages::COPY_DST);
+        let cursors = storage_init(
+            gpu,
+            "cursors",
+            &vec![0u8; ((n_lists + 1) * 4) as usize],
+            wgpu::BufferUsages::COPY_DST,
+        );
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.copy_buffer_to_buffer(&lists, 0, &cursors, 0, (n_lists + 1) * 4);
         gpu.queue.submit([enc.finish()]);
         let p = &gpu.pipelines.fill;
-        let bind = coverage_bind(gpu, p, &[(0, tris), (1, views), (2, build_uniform), (3, hiz), (4, &cursors), (5, &ids)]);
+        let bind = coverage_bind(
+            gpu,
+            p,
+            &[
+                (0, tris),
+                (1, views),
+                (2, build_uniform),
+                (3, hiz),
+                (4, &cursors),
+                (5, &ids),
+            ],
+        );
         draw_coverage(gpu, p, &bind, build);
         gpu.wait()?;
     }
     Ok((lists, ids, total))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The prefix sum on the GPU equals a sequential one, across several levels.
+    #[test]
+    fn scan_is_an_exclusive_prefix_sum() {
+        let Ok(gpu) = Gpu::new() else {
+            eprintln!("*** SKIPPING: no GPU adapter ***");
+            return;
+        };
+        for n in [1usize, 5, 256, 257, 70_000] {
+            let data: Vec<u32> = (0..n as u32).map(|i| i % 7).collect();
+            let buf = storage_init(
+                &gpu,
+                "t",
+                bytemuck::cast_slice(&data),
+                wgpu::BufferUsages::COPY_SRC,
+            );
+            scan(&gpu, &buf, n as u64).expect("scan");
+            let got = bytemuck::pod_collect_to_vec::<u8, u32>(
+                &read_back(&gpu, &buf, 0, n as u64 * 4).expect("read"),
+            );
+            let mut acc = 0;
+            let want: Vec<u32> = data
+                .iter()
+                .map(|x| {
+                    let v = acc;
+                    acc += x;
+                    v
+                })
+                .collect();
+            assert_eq!(&got[..n], &want[..], "n = {n}");
+        }
+    }
 }

@@ -15,6 +15,8 @@ pub mod fill_depth;
 pub mod fill_primitives;
 pub mod mip_depth;
 pub mod params;
+pub mod selftest;
+pub mod spirv;
 pub mod trace;
 
 pub use context::Gpu;
@@ -29,16 +31,27 @@ use wgpu::util::DeviceExt;
 /// Errors of the GPU backend.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("no GPU adapter ({0}); install mesa-vulkan-drivers for the software one and set WGPU_BACKEND=vulkan")]
+    #[error(
+        "no GPU adapter ({0}); install mesa-vulkan-drivers for the software one and set WGPU_BACKEND=vulkan"
+    )]
     NoAdapter(String),
     #[error("GPU device error: {0}")]
     Device(String),
     #[error("shader `{stage}` failed: {message}")]
-    Shader { stage: &'static str, message: String },
+    Shader {
+        stage: &'static str,
+        message: String,
+    },
     #[error(transparent)]
     Params(#[from] CpuError),
-    #[error("{what} needs {bytes} bytes in one binding; this adapter allows {limit} (max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene")]
-    TooLarge { what: &'static str, bytes: u64, limit: u64 },
+    #[error(
+        "{what} needs {bytes} bytes in one binding; this adapter allows {limit} (max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene"
+    )]
+    TooLarge {
+        what: &'static str,
+        bytes: u64,
+        limit: u64,
+    },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
 }
@@ -59,71 +72,81 @@ pub(crate) struct Pipelines {
 /// passes write storage buffers); WebGPU needs an attachment to rasterize.
 const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
-fn module(device: &wgpu::Device, stage: &'static str) -> Result<wgpu::ShaderModule, GpuError> {
-    let composed = dirt_shaders::compose(stage).map_err(|e| GpuError::Shader { stage, message: e.to_string() })?;
-    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(stage),
-        source: wgpu::ShaderSource::Wgsl(composed.text.into()),
-    }))
-}
-
-fn raster(device: &wgpu::Device, m: &wgpu::ShaderModule, fs: &str) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(fs),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: m,
-            entry_point: Some("cover_vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: None,
-        multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: m,
-            entry_point: Some(fs),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format: TARGET_FORMAT,
-                blend: None,
-                write_mask: wgpu::ColorWrites::empty(),
-            })],
+fn raster(
+    device: &wgpu::Device,
+    st: &spirv::Stage,
+    fs: &str,
+) -> Result<wgpu::RenderPipeline, GpuError> {
+    let p = st.prepare(device, &["cover_vs", fs])?;
+    let (vs_module, fs_module) = (&p.modules[0], p.modules.last().unwrap_or(&p.modules[0]));
+    Ok(
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(fs),
+            layout: Some(&p.layout),
+            vertex: wgpu::VertexState {
+                module: vs_module,
+                entry_point: Some("cover_vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: fs_module,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: TARGET_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::empty(),
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
         }),
-        multiview_mask: None,
-        cache: None,
-    })
+    )
 }
 
-fn compute(device: &wgpu::Device, m: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: None,
-        module: m,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
+pub(crate) fn compute(
+    device: &wgpu::Device,
+    st: &spirv::Stage,
+    entry: &str,
+) -> Result<wgpu::ComputePipeline, GpuError> {
+    let p = st.prepare(device, &[entry])?;
+    Ok(
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&p.layout),
+            module: &p.modules[0],
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        }),
+    )
 }
 
 impl Pipelines {
-    pub(crate) fn new(device: &wgpu::Device) -> Result<Pipelines, GpuError> {
+    pub(crate) fn new(device: &wgpu::Device, passthrough: bool) -> Result<Pipelines, GpuError> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let fd = module(device, "fill_depth")?;
-        let md = module(device, "mip_depth")?;
-        let fp = module(device, "fill_primitives")?;
-        let tr = module(device, "trace")?;
+        let fd = spirv::compile(device, "fill_depth", passthrough)?;
+        let md = spirv::compile(device, "mip_depth", passthrough)?;
+        let fp = spirv::compile(device, "fill_primitives", passthrough)?;
+        let tr = spirv::compile(device, "trace", passthrough)?;
         let p = Pipelines {
-            fill_depth: raster(device, &fd, "fill_depth"),
-            mip_depth: compute(device, &md, "mip_depth"),
-            count: raster(device, &fp, "count"),
-            scan_blocks: compute(device, &fp, "scan_blocks"),
-            scan_add: compute(device, &fp, "scan_add"),
-            fill: raster(device, &fp, "fill"),
-            trace: compute(device, &tr, "trace"),
+            fill_depth: raster(device, &fd, "fill_depth")?,
+            mip_depth: compute(device, &md, "mip_depth")?,
+            count: raster(device, &fp, "count")?,
+            scan_blocks: compute(device, &fp, "scan_blocks")?,
+            scan_add: compute(device, &fp, "scan_add")?,
+            fill: raster(device, &fp, "fill")?,
+            trace: compute(device, &tr, "trace")?,
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Shader { stage: "pipelines", message: e.to_string() });
+            return Err(GpuError::Shader {
+                stage: "pipelines",
+                message: e.to_string(),
+            });
         }
         Ok(p)
     }
@@ -156,7 +179,7 @@ pub struct GpuAds {
 
 /// Checks that one binding of `bytes` fits the adapter.
 pub(crate) fn check_binding(gpu: &Gpu, what: &'static str, bytes: u64) -> Result<(), GpuError> {
-    let limit = gpu.limits.max_storage_buffer_binding_size as u64;
+    let limit = gpu.limits.max_storage_buffer_binding_size;
     if bytes > limit {
         return Err(GpuError::TooLarge { what, bytes, limit });
     }
@@ -164,28 +187,40 @@ pub(crate) fn check_binding(gpu: &Gpu, what: &'static str, bytes: u64) -> Result
 }
 
 /// A storage buffer holding `data` (at least 16 bytes: empty bindings are invalid).
-pub(crate) fn storage_init(gpu: &Gpu, label: &str, data: &[u8], extra: wgpu::BufferUsages) -> wgpu::Buffer {
+pub(crate) fn storage_init(
+    gpu: &Gpu,
+    label: &str,
+    data: &[u8],
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     let mut bytes = data.to_vec();
     if bytes.len() < 16 {
         bytes.resize(16, 0);
     }
-    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: &bytes,
-        usage: wgpu::BufferUsages::STORAGE | extra,
-    })
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::STORAGE | extra,
+        })
 }
 
 pub(crate) fn uniform_init(gpu: &Gpu, label: &str, data: &[u8]) -> wgpu::Buffer {
-    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: data,
-        usage: wgpu::BufferUsages::UNIFORM,
-    })
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: data,
+            usage: wgpu::BufferUsages::UNIFORM,
+        })
 }
 
 /// Copies `size` bytes of `src` from `offset` back to the CPU.
-pub(crate) fn read_back(gpu: &Gpu, src: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>, GpuError> {
+pub(crate) fn read_back(
+    gpu: &Gpu,
+    src: &wgpu::Buffer,
+    offset: u64,
+    size: u64,
+) -> Result<Vec<u8>, GpuError> {
     let size = size.div_ceil(4) * 4;
     if size == 0 {
         return Ok(Vec::new());
@@ -207,7 +242,9 @@ pub(crate) fn read_back(gpu: &Gpu, src: &wgpu::Buffer, offset: u64, size: u64) -
     rx.recv()
         .map_err(|e| GpuError::Readback(e.to_string()))?
         .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let view = staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
+    let view = staging
+        .get_mapped_range(..)
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
     let out = view.to_vec();
     drop(view);
     staging.unmap();
@@ -229,18 +266,32 @@ impl GpuAds {
         let views = dirt_cpu::views_for(tris, params)?;
         let tiles = params.tiles();
         let n_views = views.views.len() as u32;
-        let n_tris = u32::try_from(tris.len()).map_err(|_| CpuError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len())))?;
+        let n_tris = u32::try_from(tris.len()).map_err(|_| {
+            CpuError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len()))
+        })?;
         // Everything that must fit one binding is checked before any work starts.
         check_binding(gpu, "triangles", tris.len() as u64 * 36)?;
         let levels = hiz_levels(tiles);
-        let cells: u64 = (0..levels).map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_views as u64).sum();
+        let cells: u64 = (0..levels)
+            .map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_views as u64)
+            .sum();
         check_binding(gpu, "Hi-Z pyramid", cells * 8)?;
         let n_lists = n_views as u64 * (tiles as u64).pow(2) * params.buckets as u64;
         check_binding(gpu, "list offsets", (n_lists + 1) * 4)?;
 
-        let tri_buf = storage_init(gpu, "triangles", bytemuck::cast_slice(tris), wgpu::BufferUsages::empty());
+        let tri_buf = storage_init(
+            gpu,
+            "triangles",
+            bytemuck::cast_slice(tris),
+            wgpu::BufferUsages::empty(),
+        );
         let views_uniform = uniform_init(gpu, "views", bytemuck::cast_slice(&views_gpu(&views)));
-        let build = BuildParams { n_tris, n_views, tiles, buckets: params.buckets };
+        let build = BuildParams {
+            n_tris,
+            n_views,
+            tiles,
+            buckets: params.buckets,
+        };
         let build_uniform = uniform_init(gpu, "build params", bytemuck::bytes_of(&build));
         let hiz = fill_depth::new_hiz_buffer(gpu, cells)?;
 
@@ -249,14 +300,26 @@ impl GpuAds {
         let t1 = Instant::now();
         mip_depth::mip_depth(gpu, &hiz, tiles, n_views)?;
         let t2 = Instant::now();
-        let (offsets, ids, nodes) = fill_primitives::fill_primitives(gpu, &tri_buf, &views_uniform, &build_uniform, &hiz, &build, n_lists)?;
+        let (offsets, ids, nodes) = fill_primitives::fill_primitives(
+            gpu,
+            &tri_buf,
+            &views_uniform,
+            &build_uniform,
+            &hiz,
+            &build,
+            n_lists,
+        )?;
         let t3 = Instant::now();
         Ok(GpuAds {
             params: *params,
             views,
             n_tris,
             nodes,
-            timings: GpuTimings { fill_depth: t1 - t0, mip_depth: t2 - t1, fill_primitives: t3 - t2 },
+            timings: GpuTimings {
+                fill_depth: t1 - t0,
+                mip_depth: t2 - t1,
+                fill_primitives: t3 - t2,
+            },
             tris: tri_buf,
             views_uniform,
             hiz,
@@ -282,9 +345,24 @@ impl GpuAds {
 
     /// The id lists read back (offsets and ids; ids in GPU order inside each list).
     pub fn read_lists(&self, gpu: &Gpu) -> Result<IdLists, GpuError> {
-        let n_lists = self.views.views.len() as u64 * (self.params.tiles() as u64).pow(2) * self.params.buckets as u64;
-        let offsets = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(gpu, &self.offsets, 0, (n_lists + 1) * 4)?);
-        let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(gpu, &self.ids, 0, self.nodes as u64 * 4)?);
-        Ok(IdLists { offsets, ids: ids[..self.nodes as usize].to_vec() })
+        let n_lists = self.views.views.len() as u64
+            * (self.params.tiles() as u64).pow(2)
+            * self.params.buckets as u64;
+        let offsets = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(
+            gpu,
+            &self.offsets,
+            0,
+            (n_lists + 1) * 4,
+        )?);
+        let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(
+            gpu,
+            &self.ids,
+            0,
+            self.nodes as u64 * 4,
+        )?);
+        Ok(IdLists {
+            offsets,
+            ids: ids[..self.nodes as usize].to_vec(),
+        })
     }
 }

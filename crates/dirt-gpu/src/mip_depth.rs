@@ -4,7 +4,12 @@
 use crate::{Gpu, GpuError, MipParams, uniform_init};
 use dirt_math::dda::{hiz_levels, hiz_width};
 
-pub(crate) fn mip_depth(gpu: &Gpu, hiz: &wgpu::Buffer, tiles: u32, n_views: u32) -> Result<(), GpuError> {
+pub(crate) fn mip_depth(
+    gpu: &Gpu,
+    hiz: &wgpu::Buffer,
+    tiles: u32,
+    n_views: u32,
+) -> Result<(), GpuError> {
     let p = &gpu.pipelines.mip_depth;
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     let mut base = 0u32;
@@ -12,15 +17,26 @@ pub(crate) fn mip_depth(gpu: &Gpu, hiz: &wgpu::Buffer, tiles: u32, n_views: u32)
     for l in 1..hiz_levels(tiles) {
         let src_w = hiz_width(tiles, l - 1);
         let dst_w = hiz_width(tiles, l);
-        let params = MipParams { src_base: base, dst_base: base + src_w * src_w * n_views, src_w, dst_w };
+        let params = MipParams {
+            src_base: base,
+            dst_base: base + src_w * src_w * n_views,
+            src_w,
+            dst_w,
+        };
         base = params.dst_base;
         let u = uniform_init(gpu, "mip params", bytemuck::bytes_of(&params));
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("mip_depth"),
             layout: &p.get_bind_group_layout(0),
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: hiz.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: u.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: hiz.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: u.as_entire_binding(),
+                },
             ],
         });
         {

@@ -2,7 +2,9 @@
 //! buffer out, in chunks that fit one binding. Mirrors `dirt_cpu::trace`.
 
 use crate::fill_primitives::grid;
-use crate::{Gpu, GpuAds, GpuError, TraceParams, check_binding, read_back, storage_init, uniform_init};
+use crate::{
+    Gpu, GpuAds, GpuError, TraceParams, check_binding, read_back, storage_init, uniform_init,
+};
 use dirt_cpu::Traversal;
 use dirt_math::dda::hiz_levels;
 use dirt_math::{Hit, Ray, RayStats};
@@ -12,7 +14,12 @@ use dirt_math::{Hit, Ray, RayStats};
 const CHUNK: usize = 1 << 18;
 
 /// Closest hits and per-ray statistics of `rays`.
-pub fn trace(gpu: &Gpu, ads: &GpuAds, rays: &[Ray], traversal: Traversal) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
+pub fn trace(
+    gpu: &Gpu,
+    ads: &GpuAds,
+    rays: &[Ray],
+    traversal: Traversal,
+) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
     let mut hits = Vec::with_capacity(rays.len());
     let mut stats = Vec::with_capacity(rays.len());
     for chunk in rays.chunks(CHUNK) {
@@ -23,12 +30,32 @@ pub fn trace(gpu: &Gpu, ads: &GpuAds, rays: &[Ray], traversal: Traversal) -> Res
     Ok((hits, stats))
 }
 
-fn trace_chunk(gpu: &Gpu, ads: &GpuAds, rays: &[Ray], traversal: Traversal) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
+fn trace_chunk(
+    gpu: &Gpu,
+    ads: &GpuAds,
+    rays: &[Ray],
+    traversal: Traversal,
+) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
     let n = rays.len() as u64;
     check_binding(gpu, "rays", n * 32)?;
-    let ray_buf = storage_init(gpu, "rays", bytemuck::cast_slice(rays), wgpu::BufferUsages::empty());
-    let hit_buf = storage_init(gpu, "hits", &vec![0u8; (n * 16) as usize], wgpu::BufferUsages::COPY_SRC);
-    let stat_buf = storage_init(gpu, "stats", &vec![0u8; (n * 16) as usize], wgpu::BufferUsages::COPY_SRC);
+    let ray_buf = storage_init(
+        gpu,
+        "rays",
+        bytemuck::cast_slice(rays),
+        wgpu::BufferUsages::empty(),
+    );
+    let hit_buf = storage_init(
+        gpu,
+        "hits",
+        &vec![0u8; (n * 16) as usize],
+        wgpu::BufferUsages::COPY_SRC,
+    );
+    let stat_buf = storage_init(
+        gpu,
+        "stats",
+        &vec![0u8; (n * 16) as usize],
+        wgpu::BufferUsages::COPY_SRC,
+    );
     let tiles = ads.params.tiles();
     let params = TraceParams {
         n_rays: n as u32,
@@ -48,15 +75,42 @@ fn trace_chunk(gpu: &Gpu, ads: &GpuAds, rays: &[Ray], traversal: Traversal) -> R
         label: Some("trace"),
         layout: &p.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: ray_buf.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: hit_buf.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: ads.tris.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 3, resource: ads.views_uniform.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 4, resource: u.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 5, resource: ads.hiz.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 6, resource: ads.offsets.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 7, resource: ads.ids.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 8, resource: stat_buf.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: ray_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: hit_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: ads.tris.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: ads.views_uniform.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: u.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: ads.hiz.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 6,
+                resource: ads.offsets.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 7,
+                resource: ads.ids.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 8,
+                resource: stat_buf.as_entire_binding(),
+            },
         ],
     });
     let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -70,6 +124,7 @@ fn trace_chunk(gpu: &Gpu, ads: &GpuAds, rays: &[Ray], traversal: Traversal) -> R
     gpu.queue.submit([enc.finish()]);
     gpu.wait()?;
     let hits = bytemuck::pod_collect_to_vec::<u8, Hit>(&read_back(gpu, &hit_buf, 0, n * 16)?);
-    let stats = bytemuck::pod_collect_to_vec::<u8, RayStats>(&read_back(gpu, &stat_buf, 0, n * 16)?);
+    let stats =
+        bytemuck::pod_collect_to_vec::<u8, RayStats>(&read_back(gpu, &stat_buf, 0, n * 16)?);
     Ok((hits[..n as usize].to_vec(), stats[..n as usize].to_vec()))
 }

@@ -32,7 +32,7 @@ pub enum Walk {
 
 /// Projected tile coordinates of the ray at `t` (depth clamped away from the apex).
 #[inline]
-fn tile_xy(v: &View, vr: &ViewRay, t: f32) -> [f32; 2] {
+pub fn tile_xy(v: &View, vr: &ViewRay, t: f32) -> [f32; 2] {
     let p = ray_point(vr, t);
     let z = fmax(p[2], v.near * 0.5);
     [v.tile_coord(p[0] / z), v.tile_coord(p[1] / z)]
@@ -41,7 +41,7 @@ fn tile_xy(v: &View, vr: &ViewRay, t: f32) -> [f32; 2] {
 /// Dilation of the walk in tile units: the ray's `eps` seen at the smallest
 /// depth of the segment, plus room for the rounding of the projection.
 #[inline]
-fn dilation(v: &View, vr: &ViewRay, iv: &Interval) -> f32 {
+pub fn dilation(v: &View, vr: &ViewRay, iv: &Interval) -> f32 {
     let z0 = vr.o[2] + iv.t0 * vr.d[2];
     let z1 = vr.o[2] + iv.t1 * vr.d[2];
     let z = fmax(fmin(z0, z1) - vr.eps, v.near * 0.5);

@@ -128,7 +128,7 @@ impl View {
         ViewRay {
             o,
             d,
-            eps: EPS_REL * (m + 2.0 * self.scale),
+            eps: EPS_RAY_REL * (m + 2.0 * self.scale),
         }
     }
 
