@@ -1,0 +1,147 @@
+//! Every GPU struct is declared once in Rust; these tests compare its size and
+//! field offsets with the WGSL declaration as naga lays it out, and check that
+//! each stage carries one name across the CPU module, the WGSL file and the GPU pass.
+
+use std::mem::{offset_of, size_of};
+
+/// (field name, Rust offset) in declaration order, and the Rust size.
+type RustLayout = (Vec<(&'static str, usize)>, usize);
+
+macro_rules! rust_layout {
+    ($t:ty { $($f:ident),* $(,)? }) => {
+        (vec![$((stringify!($f), offset_of!($t, $f))),*], size_of::<$t>())
+    };
+}
+
+fn check(stage: &str, wgsl_name: &str, rust: RustLayout) {
+    let module = dirt_shaders::validate(stage)
+        .unwrap_or_else(|e| panic!("{stage} does not validate: {e:?}"));
+    let layout = dirt_shaders::struct_layout(&module, wgsl_name)
+        .unwrap_or_else(|| panic!("no struct {wgsl_name} in {stage}"));
+    let (fields, size) = rust;
+    assert_eq!(
+        layout.size as usize, size,
+        "{wgsl_name}: WGSL size {} vs Rust {size}",
+        layout.size
+    );
+    let wgsl: Vec<(String, usize)> = layout
+        .members
+        .iter()
+        .map(|(n, o, _)| (n.clone(), *o as usize))
+        .collect();
+    let rust: Vec<(String, usize)> = fields.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+    assert_eq!(wgsl, rust, "{wgsl_name}: members (name, offset) differ");
+}
+
+#[test]
+fn shared_structs_match_their_wgsl() {
+    use dirt_gpu::{BuildParams, MipParams, ScanParams, TraceParams};
+    use dirt_math::{Hit, Ray, RayStats, ViewGpu};
+    check(
+        "trace",
+        "Ray",
+        rust_layout!(Ray {
+            origin,
+            tmin,
+            dir,
+            tmax
+        }),
+    );
+    check("trace", "Hit", rust_layout!(Hit { prim, t, u, v }));
+    check(
+        "trace",
+        "View",
+        rust_layout!(ViewGpu {
+            apex,
+            tan,
+            right,
+            near,
+            up,
+            far,
+            forward,
+            eps,
+            tiles,
+            step,
+            scale,
+            has_content,
+            adjacency
+        }),
+    );
+    check(
+        "trace",
+        "RayStats",
+        rust_layout!(RayStats {
+            views,
+            tiles,
+            buckets,
+            tests
+        }),
+    );
+    check(
+        "trace",
+        "TraceParams",
+        rust_layout!(TraceParams {
+            n_rays,
+            n_views,
+            tiles,
+            buckets,
+            levels,
+            traversal,
+            _pad0,
+            _pad1
+        }),
+    );
+    check(
+        "fill_depth",
+        "BuildParams",
+        rust_layout!(BuildParams {
+            n_tris,
+            n_views,
+            tiles,
+            buckets
+        }),
+    );
+    check(
+        "mip_depth",
+        "MipParams",
+        rust_layout!(MipParams {
+            src_base,
+            dst_base,
+            src_w,
+            dst_w
+        }),
+    );
+    check(
+        "fill_primitives",
+        "ScanParams",
+        rust_layout!(ScanParams {
+            n,
+            _pad0,
+            _pad1,
+            _pad2
+        }),
+    );
+}
+
+#[test]
+fn a_changed_field_is_caught() {
+    // The check has teeth: a Rust layout with two fields swapped is rejected.
+    let swapped = (vec![("prim", 4usize), ("t", 0)], 16);
+    let r = std::panic::catch_unwind(|| check("trace", "Hit", (swapped.0.clone(), swapped.1)));
+    assert!(r.is_err());
+}
+
+#[test]
+fn each_stage_has_one_name_everywhere() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for stage in dirt_shaders::STAGES {
+        assert!(
+            dirt_shaders::source(stage).is_some(),
+            "shaders/wgsl/{stage}.wgsl is missing"
+        );
+        for dir in ["crates/dirt-cpu/src", "crates/dirt-gpu/src"] {
+            let p = root.join(dir).join(format!("{stage}.rs"));
+            assert!(p.exists(), "{} is missing", p.display());
+        }
+    }
+}
