@@ -2,7 +2,7 @@
 //! quad of every triangle; each fragment runs the exact tile test and updates
 //! the tile's `[zmin, zmax]` with atomic min/max. Mirrors `dirt_cpu::fill_depth`.
 
-use crate::{BuildParams, Gpu, GpuError, storage_init};
+use crate::{BuildParams, Gpu, GpuError, bind_buffers, storage_init};
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF};
 
 /// The Hi-Z buffer, every cell `[enc(+inf), enc(-inf)]` (empty).
@@ -81,28 +81,12 @@ pub(crate) fn fill_depth(
         return Ok(());
     }
     let p = &gpu.pipelines.fill_depth;
-    let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("fill_depth"),
-        layout: &p.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: tris.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: views.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: build_uniform.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: hiz.as_entire_binding(),
-            },
-        ],
-    });
+    let bind = bind_buffers(
+        gpu,
+        "fill_depth",
+        &p.get_bind_group_layout(0),
+        &[(0, tris), (1, views), (2, build_uniform), (3, hiz)],
+    );
     draw_coverage(gpu, p, &bind, build);
     gpu.wait()
 }

@@ -7,7 +7,8 @@
 
 use crate::fill_depth::draw_coverage;
 use crate::{
-    BuildParams, Gpu, GpuError, ScanParams, check_binding, read_back, storage_init, uniform_init,
+    BuildParams, Gpu, GpuError, ScanParams, bind_buffers, check_binding, read_back, storage_init,
+    uniform_init,
 };
 
 const SCAN_BLOCK: u64 = 256;
@@ -64,24 +65,12 @@ fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
                 ..Default::default()
             }),
         );
-        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scan"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: data.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: sums.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 8,
-                    resource: u.as_entire_binding(),
-                },
-            ],
-        });
+        let bind = bind_buffers(
+            gpu,
+            "scan",
+            &pipeline.get_bind_group_layout(0),
+            &[(6, data), (7, sums), (8, &u)],
+        );
         let (x, y) = grid(gpu, n.div_ceil(SCAN_BLOCK));
         let mut pass = enc.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
@@ -99,25 +88,6 @@ fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
     }
     gpu.queue.submit([enc.finish()]);
     gpu.wait()
-}
-
-fn coverage_bind(
-    gpu: &Gpu,
-    pipeline: &wgpu::RenderPipeline,
-    bufs: &[(u32, &wgpu::Buffer)],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = bufs
-        .iter()
-        .map(|(b, buf)| wgpu::BindGroupEntry {
-            binding: *b,
-            resource: buf.as_entire_binding(),
-        })
-        .collect();
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("fill_primitives"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
-    })
 }
 
 /// Returns (offsets, ids, node count).
@@ -139,9 +109,10 @@ pub(crate) fn fill_primitives(
     );
     if build.n_tris > 0 {
         let p = &gpu.pipelines.count;
-        let bind = coverage_bind(
+        let bind = bind_buffers(
             gpu,
-            p,
+            "fill_primitives",
+            &p.get_bind_group_layout(0),
             &[
                 (0, tris),
                 (1, views),
@@ -172,9 +143,10 @@ pub(crate) fn fill_primitives(
         enc.copy_buffer_to_buffer(&lists, 0, &cursors, 0, (n_lists + 1) * 4);
         gpu.queue.submit([enc.finish()]);
         let p = &gpu.pipelines.fill;
-        let bind = coverage_bind(
+        let bind = bind_buffers(
             gpu,
-            p,
+            "fill_primitives",
+            &p.get_bind_group_layout(0),
             &[
                 (0, tris),
                 (1, views),

@@ -214,6 +214,27 @@ pub(crate) fn uniform_init(gpu: &Gpu, label: &str, data: &[u8]) -> wgpu::Buffer 
         })
 }
 
+/// A bind group of whole buffers for group 0 of `layout`: `(binding, buffer)` pairs.
+pub(crate) fn bind_buffers(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .map(|(binding, buf)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buf.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 /// Copies `size` bytes of `src` from `offset` back to the CPU.
 pub(crate) fn read_back(
     gpu: &Gpu,

@@ -1,7 +1,7 @@
 //! Pass `mip_depth` (`mip_depth.wgsl`): one compute dispatch per Hi-Z level.
 //! Mirrors `dirt_cpu::mip_depth`.
 
-use crate::{Gpu, GpuError, MipParams, uniform_init};
+use crate::{Gpu, GpuError, MipParams, bind_buffers, uniform_init};
 use dirt_math::dda::{hiz_levels, hiz_width};
 
 pub(crate) fn mip_depth(
@@ -25,20 +25,12 @@ pub(crate) fn mip_depth(
         };
         base = params.dst_base;
         let u = uniform_init(gpu, "mip params", bytemuck::bytes_of(&params));
-        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mip_depth"),
-            layout: &p.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: hiz.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: u.as_entire_binding(),
-                },
-            ],
-        });
+        let bind = bind_buffers(
+            gpu,
+            "mip_depth",
+            &p.get_bind_group_layout(0),
+            &[(0, hiz), (1, &u)],
+        );
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(p);

@@ -26,20 +26,12 @@ pub fn run(
         &vec![0u8; out_words * 4],
         wgpu::BufferUsages::COPY_SRC,
     );
-    let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("selftest"),
-        layout: &p.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: inb.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: outb.as_entire_binding(),
-            },
-        ],
-    });
+    let bind = crate::bind_buffers(
+        gpu,
+        "selftest",
+        &p.get_bind_group_layout(0),
+        &[(0, &inb), (1, &outb)],
+    );
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());

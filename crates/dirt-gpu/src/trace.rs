@@ -71,48 +71,22 @@ fn trace_chunk(
     };
     let u = uniform_init(gpu, "trace params", bytemuck::bytes_of(&params));
     let p = &gpu.pipelines.trace;
-    let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("trace"),
-        layout: &p.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: ray_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: hit_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: ads.tris.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: ads.views_uniform.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: u.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: ads.hiz.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 6,
-                resource: ads.offsets.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 7,
-                resource: ads.ids.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 8,
-                resource: stat_buf.as_entire_binding(),
-            },
+    let bind = crate::bind_buffers(
+        gpu,
+        "trace",
+        &p.get_bind_group_layout(0),
+        &[
+            (0, &ray_buf),
+            (1, &hit_buf),
+            (2, &ads.tris),
+            (3, &ads.views_uniform),
+            (4, &u),
+            (5, &ads.hiz),
+            (6, &ads.offsets),
+            (7, &ads.ids),
+            (8, &stat_buf),
         ],
-    });
+    );
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     {
         let (x, y) = grid(gpu, n.div_ceil(64));
