@@ -2,15 +2,17 @@
 //!
 //! ```text
 //! dirt rays      SCENE --out RAYS.npy [--count N] [--seed S] [--kind mixed|camera|random|inside]
-//! dirt trace     SCENE --rays RAYS.npy --out HITS.npy [--backend cpu|brute] [ADS options] [--traversal linear|hiz]
+//! dirt trace     SCENE --rays RAYS.npy --out HITS.npy [--backend cpu|gpu|brute] [ADS options] [--traversal linear|hiz]
+//! dirt bench     SCENE [ADS options] [--rays N] [--seed S] [--kind K] [--backends cpu,gpu,brute] [--repeat K] [--json FILE]
 //! dirt triangles SCENE --out TRIS.npy
 //! dirt info      SCENE [ADS options]
 //! ADS options:   [--views cube|single] [--resolution N] [--buckets B] [--tile S] [--center X,Y,Z]
 //! ```
 //!
 //! File formats are described in [`npy`]. Timings and counts go to stderr,
-//! `dirt info` prints to stdout.
+//! `dirt info` and `dirt bench` print to stdout.
 
+mod bench;
 mod npy;
 mod raygen;
 
@@ -21,7 +23,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind};
+use dirt_cpu::{Ads, AdsParams, BuildTimings, Traversal, ViewsKind};
+use dirt_gpu::{Gpu, GpuAds};
 use dirt_math::{Hit, Ray, Vec3};
 use dirt_scene::{CameraKind, Scene};
 
@@ -39,7 +42,9 @@ use crate::raygen::RayKind;
     after_help = "Typical use:\n  \
         dirt rays cornell --out rays.npy\n  \
         dirt trace cornell --rays rays.npy --out hits.npy\n  \
-        dirt trace cornell --rays rays.npy --out truth.npy --backend brute"
+        dirt trace cornell --rays rays.npy --out gpu.npy --backend gpu\n  \
+        dirt trace cornell --rays rays.npy --out truth.npy --backend brute\n  \
+        dirt bench cornell --rays 200000 --repeat 3"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -56,6 +61,9 @@ enum Command {
     Info(InfoArgs),
     /// Write a file of test rays for a scene (deterministic for a seed).
     Rays(RaysArgs),
+    /// Benchmark build and trace of every backend side by side on generated rays,
+    /// with their errors against brute force (a Markdown table on stdout).
+    Bench(bench::BenchArgs),
 }
 
 /// The positional scene argument shared by every subcommand.
@@ -81,7 +89,7 @@ struct TraceArgs {
     backend: Backend,
     #[command(flatten)]
     ads: AdsArgs,
-    /// How the cpu backend walks the tiles a ray crosses.
+    /// How the cpu and gpu backends walk the tiles a ray crosses.
     #[arg(long, value_enum, default_value_t = TraversalArg::from(Traversal::default()))]
     traversal: TraversalArg,
 }
@@ -154,11 +162,14 @@ impl AdsArgs {
     }
 }
 
-/// The tracer behind `dirt trace`. A `gpu` backend joins here.
+/// The tracer behind `dirt trace`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Backend {
     /// DIRT on the CPU (dirt-cpu).
     Cpu,
+    /// DIRT on the GPU (dirt-gpu, wgpu; set WGPU_BACKEND=vulkan). Without a usable
+    /// adapter it says so and runs the cpu backend, whose hits are the same bits.
+    Gpu,
     /// Every ray against every triangle with the same triangle test: the ground truth.
     Brute,
 }
@@ -167,6 +178,7 @@ impl fmt::Display for Backend {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
             Backend::Brute => "brute",
         })
     }
@@ -272,6 +284,7 @@ fn main() -> ExitCode {
         Command::Triangles(args) => triangles(&args),
         Command::Info(args) => info(&args),
         Command::Rays(args) => rays(&args),
+        Command::Bench(args) => bench::bench(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -317,13 +330,19 @@ fn trace(args: &TraceArgs) -> Result<()> {
         args.rays.display(),
         args.backend
     );
-    let (hits, build_time, trace_time) = match args.backend {
-        Backend::Cpu => {
-            let (ads, build_time) = build_ads(&scene, &args.ads)?;
-            let start = Instant::now();
-            let hits = dirt_cpu::trace(&ads, &scene.triangles, &rays, args.traversal.into());
-            (hits, Some(build_time), start.elapsed())
-        }
+    let traversal = Traversal::from(args.traversal);
+    let (hits, build, trace_time) = match args.backend {
+        Backend::Cpu => trace_cpu(&scene, &args.ads, &rays, traversal)?,
+        Backend::Gpu => match open_gpu() {
+            Ok(gpu) => {
+                eprintln!("{}", gpu_line(&gpu));
+                trace_gpu(&gpu, &scene, &args.ads, &rays, traversal)?
+            }
+            Err(reason) => {
+                eprintln!("{}", fallback_line(&reason));
+                trace_cpu(&scene, &args.ads, &rays, traversal)?
+            }
+        },
         Backend::Brute => {
             let start = Instant::now();
             let hits = dirt_cpu::brute_force::trace(&scene.triangles, &rays);
@@ -333,8 +352,14 @@ fn trace(args: &TraceArgs) -> Result<()> {
     check_hit_count(&rays, &hits, args.backend)?;
     npy::write_hits(&args.out, &hits)?;
 
-    match build_time {
-        Some(d) => eprintln!("build: {:.3} ms", millis(d)),
+    match build {
+        Some((d, stages)) => eprintln!(
+            "build: {:.3} ms (fill_depth {:.3} ms, mip_depth {:.3} ms, fill_primitives {:.3} ms)",
+            millis(d),
+            millis(stages.fill_depth),
+            millis(stages.mip_depth),
+            millis(stages.fill_primitives)
+        ),
         None => eprintln!("build: none (brute force)"),
     }
     let secs = trace_time.as_secs_f64();
@@ -353,6 +378,83 @@ fn trace(args: &TraceArgs) -> Result<()> {
     eprintln!("hits: {hit_count} of {} rays ({percent:.2} %)", rays.len());
     eprintln!("wrote {}", args.out.display());
     Ok(())
+}
+
+/// Hits, the build's wall time and stage times (none for brute force), and the trace's wall time.
+type Traced = (Vec<Hit>, Option<(Duration, BuildTimings)>, Duration);
+
+fn trace_cpu(scene: &Scene, ads: &AdsArgs, rays: &[Ray], traversal: Traversal) -> Result<Traced> {
+    let (ads, build_time) = build_ads(scene, ads)?;
+    let start = Instant::now();
+    let hits = dirt_cpu::trace(&ads, &scene.triangles, rays, traversal);
+    Ok((hits, Some((build_time, ads.timings)), start.elapsed()))
+}
+
+fn trace_gpu(
+    gpu: &Gpu,
+    scene: &Scene,
+    ads: &AdsArgs,
+    rays: &[Ray],
+    traversal: Traversal,
+) -> Result<Traced> {
+    let (gpu_ads, build_time) = build_gpu_ads(gpu, scene, ads)?;
+    let start = Instant::now();
+    let (hits, _stats) = dirt_gpu::trace::trace(gpu, &gpu_ads, rays, traversal)
+        .with_context(|| format!("cannot trace on the GPU ({})", gpu.describe()))?;
+    let t = gpu_ads.timings;
+    let stages = BuildTimings {
+        fill_depth: t.fill_depth,
+        mip_depth: t.mip_depth,
+        fill_primitives: t.fill_primitives,
+    };
+    Ok((hits, Some((build_time, stages)), start.elapsed()))
+}
+
+fn build_gpu_ads(gpu: &Gpu, scene: &Scene, ads: &AdsArgs) -> Result<(GpuAds, Duration)> {
+    let params = ads.params();
+    let start = Instant::now();
+    let built = GpuAds::build(gpu, &scene.triangles, &params).with_context(|| {
+        format!(
+            "cannot build the acceleration structure of {} on the GPU ({params:?})",
+            scene.name
+        )
+    })?;
+    Ok((built, start.elapsed()))
+}
+
+/// Opens the GPU; the error is the reason in words. A panic inside the driver
+/// stack counts as no usable GPU, not as a crash.
+fn open_gpu() -> std::result::Result<Gpu, String> {
+    match std::panic::catch_unwind(Gpu::new) {
+        Ok(Ok(gpu)) => Ok(gpu),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(panic) => Err(panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .map_or_else(
+                || "the GPU stack panicked".to_owned(),
+                |m| format!("the GPU stack panicked: {m}"),
+            )),
+    }
+}
+
+/// The line naming the adapter when the GPU is used.
+fn gpu_line(gpu: &Gpu) -> String {
+    format!(
+        "gpu adapter: {}; {}",
+        gpu.describe(),
+        if gpu.exact {
+            "exact (NoContraction SPIR-V: the CPU's bits are promised)"
+        } else {
+            "not exact (plain WGSL: hits may differ from the CPU's in the last bits)"
+        }
+    )
+}
+
+/// The line saying that the GPU is not used, and why.
+fn fallback_line(reason: &str) -> String {
+    format!("dirt: no usable GPU ({reason}); falling back to the CPU backend")
 }
 
 /// A backend must answer every ray exactly once.

@@ -536,3 +536,191 @@ fn bad_arguments_are_refused_with_the_reason() {
     let stderr = dirt_err(&["rays", SCENE, "--out", "r.npy", "--kind", "sideways"]);
     assert!(stderr.contains("mixed"), "{stderr}");
 }
+
+/// Runs dirt with extra environment variables and requires success.
+fn dirt_ok_env(args: &[&str], env: &[(&str, &str)]) -> (String, String) {
+    let out = Command::new(DIRT)
+        .args(args)
+        .envs(env.iter().copied())
+        .output()
+        .expect("run dirt");
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(
+        out.status.success(),
+        "dirt {args:?} (env {env:?}) failed ({}):\n{stderr}",
+        out.status
+    );
+    (stdout, stderr)
+}
+
+const GPU_LINE: &str = "gpu adapter:";
+const FALLBACK_LINE: &str = "falling back to the CPU backend";
+
+/// `dirt trace --backend gpu` writes the bytes `--backend cpu` writes: on a GPU
+/// by the bit-exact contract (NoContraction path), without one because it
+/// falls back to the CPU backend and says so. With `DIRT_REQUIRE_GPU=1` (CI)
+/// the GPU must be used.
+#[test]
+fn gpu_hits_equal_cpu_hits_byte_for_byte() {
+    let dir = TestDir::new("gpu");
+    let (rays, cpu, gpu) = (
+        dir.path("rays.npy"),
+        dir.path("cpu.npy"),
+        dir.path("gpu.npy"),
+    );
+    dirt_ok(&[
+        "rays",
+        SCENE,
+        "--out",
+        s(&rays),
+        "--count",
+        "2000",
+        "--seed",
+        "5",
+    ]);
+    dirt_ok(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&cpu),
+        "--backend",
+        "cpu",
+    ]);
+    let (_, log) = dirt_ok(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&gpu),
+        "--backend",
+        "gpu",
+    ]);
+    let used_gpu = log.contains(GPU_LINE);
+    assert!(
+        used_gpu != log.contains(FALLBACK_LINE),
+        "the log names the adapter or the fallback, one of them:\n{log}"
+    );
+    if std::env::var("DIRT_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+        assert!(used_gpu, "DIRT_REQUIRE_GPU=1 but:\n{log}");
+    }
+    for word in ["backend gpu", "build:", "trace:", "Mrays/s", "hits:"] {
+        assert!(log.contains(word), "trace log lacks {word:?}:\n{log}");
+    }
+    if used_gpu && log.contains("not exact") {
+        eprintln!("\n*** SKIPPING BYTE COMPARISON: the adapter promises no bits:\n{log}***\n");
+        return;
+    }
+    assert!(
+        fs::read(&gpu).expect("gpu hits") == fs::read(&cpu).expect("cpu hits"),
+        "gpu hits differ from cpu hits:\n{log}"
+    );
+}
+
+/// Without an adapter (`WGPU_BACKEND=gl`: not compiled in) `--backend gpu`
+/// says so on one line and runs the CPU backend: the same bytes, status 0.
+#[test]
+fn gpu_backend_without_an_adapter_falls_back_to_the_cpu() {
+    let dir = TestDir::new("fallback");
+    let (rays, cpu, gpu) = (
+        dir.path("rays.npy"),
+        dir.path("cpu.npy"),
+        dir.path("gpu.npy"),
+    );
+    dirt_ok(&["rays", SCENE, "--out", s(&rays), "--count", "500"]);
+    dirt_ok(&["trace", SCENE, "--rays", s(&rays), "--out", s(&cpu)]);
+    let (_, log) = dirt_ok_env(
+        &[
+            "trace",
+            SCENE,
+            "--rays",
+            s(&rays),
+            "--out",
+            s(&gpu),
+            "--backend",
+            "gpu",
+            "--traversal",
+            "hiz",
+        ],
+        &[("WGPU_BACKEND", "gl")],
+    );
+    let fallback: Vec<&str> = log.lines().filter(|l| l.contains(FALLBACK_LINE)).collect();
+    assert_eq!(fallback.len(), 1, "one fallback line:\n{log}");
+    assert!(
+        fallback[0].starts_with("dirt: no usable GPU ("),
+        "{}",
+        fallback[0]
+    );
+    assert!(!log.contains(GPU_LINE), "{log}");
+    assert!(
+        fs::read(&gpu).expect("fallback hits") == fs::read(&cpu).expect("cpu hits"),
+        "fallback hits differ from cpu hits:\n{log}"
+    );
+}
+
+/// `dirt bench` measures both traversals of every backend and counts the rays
+/// that differ from brute force; the cpu rows must count none.
+#[test]
+fn bench_prints_a_table_of_both_traversals() {
+    let dir = TestDir::new("bench");
+    let json = dir.path("bench.json");
+    let (table, log) = dirt_ok(&[
+        "bench",
+        SCENE,
+        "--rays",
+        "2000",
+        "--repeat",
+        "1",
+        "--json",
+        s(&json),
+    ]);
+    for word in [
+        "| backend | traversal | build ms | trace ms | Mrays/s |",
+        "tests/ray",
+        "mismatches vs brute",
+        "| linear |",
+        "| hiz |",
+        "| brute |",
+        "2000 mixed rays",
+        "CPU threads",
+        "GPU: ",
+    ] {
+        assert!(table.contains(word), "bench table lacks {word:?}:\n{table}");
+    }
+    // Trace rows are `| backend | traversal | …`; the build table has no traversal.
+    let rows = |backend: &str| -> Vec<String> {
+        table
+            .lines()
+            .filter(|l| {
+                ["linear", "hiz"]
+                    .iter()
+                    .any(|t| l.starts_with(&format!("| {backend} | {t} |")))
+            })
+            .map(str::to_owned)
+            .collect()
+    };
+    let cpu_rows = rows("cpu");
+    assert_eq!(cpu_rows.len(), 2, "{table}");
+    for row in cpu_rows {
+        assert!(
+            row.contains("| 0 / 2000 |"),
+            "cpu differs from brute: {row}"
+        );
+    }
+    let gpu_used = log.contains(GPU_LINE);
+    assert_eq!(
+        rows("gpu").len(),
+        if gpu_used { 2 } else { 0 },
+        "{table}\n{log}"
+    );
+    let json = fs::read_to_string(&json).expect("bench json");
+    for word in [
+        "\"rows\"",
+        "\"traversal\": \"hiz\"",
+        "\"mismatches_vs_brute\"",
+    ] {
+        assert!(json.contains(word), "bench json lacks {word:?}:\n{json}");
+    }
+}
