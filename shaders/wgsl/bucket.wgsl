@@ -1,5 +1,6 @@
 // Mirrors dirt_math::bucket: depth buckets of a tile (001 eq. 1).
 #import divide
+#import work
 
 fn bucket_of(z: f32, zmin: f32, zmax: f32, buckets: u32) -> u32 {
     if buckets <= 1u {
@@ -19,10 +20,10 @@ fn bucket_of(z: f32, zmin: f32, zmax: f32, buckets: u32) -> u32 {
     } else if est >= 0.0 {
         k = u32(est);
     }
-    while k > 0u && f32(k) * range > x {
+    while k > 0u && f32(k) * range > x && work() {
         k -= 1u;
     }
-    while k < last && f32(k + 1u) * range <= x {
+    while k < last && f32(k + 1u) * range <= x && work() {
         k += 1u;
     }
     return k;

@@ -4,6 +4,7 @@
 #import num
 #import divide
 #import view
+#import work
 
 // dirt_math::clip::HalfSpace as (kind, axis, s): kind 0 = Lo, 1 = Hi, 2 = Near (s = near), 3 = Far (s = far).
 struct HalfSpace {
@@ -150,7 +151,7 @@ struct ViewClip {
 fn clip_ray_to_view(v: View, vr: ViewRay, tmin: f32, tmax: f32) -> ViewClip {
     var iv = Interval(tmin, tmax);
     var exit = NO_EXIT;
-    for (var k = 0u; k < 6u; k++) {
+    for (var k = 0u; k < 6u && work(); k++) {
         if clip_interval(&iv, view_halfspace(v, k), vr) {
             exit = select(NO_EXIT, k, k < 4u);
         }

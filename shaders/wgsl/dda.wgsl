@@ -60,12 +60,23 @@ fn hiz_cell_clip(v: View, vr: ViewRay, iv: Interval, level: u32, ci: u32, cj: u3
     let j0 = cj << level;
     let i1 = min((ci + 1u) << level, v.tiles);
     let j1 = min((cj + 1u) << level, v.tiles);
+    // The loop over the four planes of the Rust, unrolled (see triangle.wgsl).
     var out = iv;
-    for (var k = 0u; k < 4u; k++) {
-        clip_interval(&out, block_halfspace(v, i0, i1, j0, j1, k), vr);
-        if is_empty(out) {
-            return interval_empty();
-        }
+    clip_interval(&out, block_halfspace(v, i0, i1, j0, j1, 0u), vr);
+    if is_empty(out) {
+        return interval_empty();
+    }
+    clip_interval(&out, block_halfspace(v, i0, i1, j0, j1, 1u), vr);
+    if is_empty(out) {
+        return interval_empty();
+    }
+    clip_interval(&out, block_halfspace(v, i0, i1, j0, j1, 2u), vr);
+    if is_empty(out) {
+        return interval_empty();
+    }
+    clip_interval(&out, block_halfspace(v, i0, i1, j0, j1, 3u), vr);
+    if is_empty(out) {
+        return interval_empty();
     }
     return out;
 }

@@ -88,18 +88,23 @@ fn div_cr(a: f32, b: f32) -> f32 {
         return bitcast<f32>(sign | DIV_INF);
     }
 
-    // Restoring long division: q = floor(ma / mb * 2^25) in [2^25, 2^26).
-    // Invariant: r < 2 * mb < 2^25 before each compare.
-    var q: u32 = 0u;
-    var r = ma;
-    for (var i = 0u; i < 26u; i++) {
-        q <<= 1u;
-        if r >= mb {
-            r -= mb;
-            q |= 1u;
-        }
-        r <<= 1u;
-    }
+    // Long division in integer steps, no loop (lavapipe caps the loop
+    // iterations of a whole invocation): q = floor(ma / mb * 2^25) in
+    // [2^25, 2^26). The remainder stays below mb < 2^24, so r << 8 fits.
+    var q = ma / mb; // 1
+    var r = ma % mb;
+    r <<= 8u;
+    q = (q << 8u) | (r / mb);
+    r %= mb;
+    r <<= 8u;
+    q = (q << 8u) | (r / mb);
+    r %= mb;
+    r <<= 8u;
+    q = (q << 8u) | (r / mb);
+    r %= mb;
+    r <<= 1u;
+    q = (q << 1u) | (r / mb);
+    r %= mb;
     let sticky = r != 0u; // bits below q's last are nonzero
 
     // Drop s bits: 2 for a normal result (e >= 1), 2 + (1 - e) for a

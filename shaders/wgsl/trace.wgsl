@@ -9,6 +9,7 @@
 #import bucket
 #import dda
 #import triangle
+#import work
 
 // dirt_gpu::TraceParams
 struct TraceParams {
@@ -38,6 +39,8 @@ var<private> g_best: Hit;
 var<private> g_stats: RayStats;
 // Start of each Hi-Z level in `hiz` (in tiles; two u32 per tile).
 var<private> g_level_base: array<u32, 16>;
+// Cells per side of each Hi-Z level.
+var<private> g_level_width: array<u32, 16>;
 
 fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
     let b = prim * 9u + k * 3u;
@@ -76,7 +79,7 @@ fn visit_tile(view: u32, v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
     let b0 = bucket_of(lo, zmin, zmax, nb);
     let b1 = bucket_of(hi, zmin, zmax, nb);
     let ascending = vr.d[2] >= 0.0;
-    for (var n = 0u; n <= b1 - b0; n++) {
+    for (var n = 0u; n <= b1 - b0 && work(); n++) {
         let k = select(b1 - n, b0 + n, ascending);
         if hit_is_hit(g_best) {
             let zb = ray_depth(vr, g_best.t);
@@ -91,7 +94,7 @@ fn visit_tile(view: u32, v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
         let list = tile * nb + k;
         let start = offsets[list];
         let end = offsets[list + 1u];
-        for (var at = start; at < end; at++) {
+        for (var at = start; at < end && work(); at++) {
             g_stats.tests += 1u;
             intersect_closest(ids[at]);
         }
@@ -114,38 +117,40 @@ fn linear(view: u32, v: View, vr: ViewRay, iv: Interval) {
     }
     let forward = b[major] >= a[major];
     let minor_forward = b[minor] >= a[minor];
-    for (var n = 0u; n <= kr.hi - kr.lo; n++) {
+    // Structured without `continue` and with a single exit: lavapipe
+    // mis-ran later loops of the kernel after `continue` in these loops.
+    var n = 0u;
+    var walking = true;
+    while walking && n <= kr.hi - kr.lo && work() {
         let k = select(kr.hi - n, kr.lo + n, forward);
         var band = iv;
         clip_interval(&band, hs_lo(major, boundary(v, k)), vr);
         clip_interval(&band, hs_hi(major, boundary(v, k + 1u)), vr);
-        if is_empty(band) {
-            continue;
-        }
-        if band.t0 > g_best.t {
-            return;
-        }
-        let p = tile_xy(v, vr, band.t0);
-        let q = tile_xy(v, vr, band.t1);
-        let mr = index_range(p[minor], q[minor], delta, v.tiles);
-        if !mr.ok {
-            continue;
-        }
-        for (var e = 0u; e <= mr.hi - mr.lo; e++) {
-            let m = select(mr.hi - e, mr.lo + e, minor_forward);
-            var span = band;
-            clip_interval(&span, hs_lo(minor, boundary(v, m)), vr);
-            clip_interval(&span, hs_hi(minor, boundary(v, m + 1u)), vr);
-            if is_empty(span) {
-                continue;
+        if !is_empty(band) {
+            if band.t0 > g_best.t {
+                walking = false;
+            } else {
+                let p = tile_xy(v, vr, band.t0);
+                let q = tile_xy(v, vr, band.t1);
+                let mr = index_range(p[minor], q[minor], delta, v.tiles);
+                if mr.ok {
+                    for (var e = 0u; e <= mr.hi - mr.lo && work(); e++) {
+                        let m = select(mr.hi - e, mr.lo + e, minor_forward);
+                        var span = band;
+                        clip_interval(&span, hs_lo(minor, boundary(v, m)), vr);
+                        clip_interval(&span, hs_hi(minor, boundary(v, m + 1u)), vr);
+                        if !is_empty(span) {
+                            let i = select(m, k, major == 0u);
+                            let j = select(k, m, major == 0u);
+                            visit_tile(view, v, vr, i, j, span);
+                        }
+                    }
+                }
             }
-            let i = select(m, k, major == 0u);
-            let j = select(k, m, major == 0u);
-            visit_tile(view, v, vr, i, j, span);
         }
+        n += 1u;
     }
 }
-
 
 // dirt_cpu::trace::hiz
 fn hiz_walk(view: u32, v: View, vr: ViewRay, iv: Interval) {
@@ -155,7 +160,7 @@ fn hiz_walk(view: u32, v: View, vr: ViewRay, iv: Interval) {
     var top = 0u;
     stack[0] = vec3<u32>(levels - 1u, 0u, 0u);
     top = 1u;
-    while top > 0u {
+    while top > 0u && work() {
         top -= 1u;
         let cell = stack[top];
         let level = cell.x;
@@ -163,7 +168,7 @@ fn hiz_walk(view: u32, v: View, vr: ViewRay, iv: Interval) {
         if is_empty(civ) || civ.t0 > g_best.t {
             continue;
         }
-        let w = hiz_width(v.tiles, level);
+        let w = g_level_width[level];
         let at = g_level_base[level] + view * w * w + cell.z * w + cell.y;
         let zmin = ordered_to_f32(hiz[2u * at]);
         let zmax = ordered_to_f32(hiz[2u * at + 1u]);
@@ -175,8 +180,8 @@ fn hiz_walk(view: u32, v: View, vr: ViewRay, iv: Interval) {
             visit_tile(view, v, vr, cell.y, cell.z, civ);
             continue;
         }
-        let cw = hiz_width(v.tiles, level - 1u);
-        for (var r = 0u; r < 4u; r++) {
+        let cw = g_level_width[level - 1u];
+        for (var r = 0u; r < 4u && work(); r++) {
             let c = child_order(dir.x, dir.y, 3u - r);
             let i = 2u * cell.y + c.x;
             let j = 2u * cell.z + c.y;
@@ -213,16 +218,18 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     g_sh = ray_shear(ray);
     // Level bases of the Hi-Z buffer.
     var base = 0u;
-    for (var l = 0u; l < params.levels; l++) {
+    var width = max(params.tiles, 1u);
+    for (var l = 0u; l < params.levels && work(); l++) {
         g_level_base[l] = base;
-        let w = hiz_width(params.tiles, l);
-        base += params.n_views * w * w;
+        g_level_width[l] = width;
+        base += params.n_views * width * width;
+        width = (width + 1u) / 2u;
     }
     let n = params.n_views;
     var vrs: array<ViewRay, 6>;
     var ivs: array<Interval, 6>;
     var exits: array<u32, 6>;
-    for (var f = 0u; f < n; f++) {
+    for (var f = 0u; f < n && work(); f++) {
         let v = views[f];
         let vr = view_ray(v, ray);
         var c = ViewClip(interval_empty(), NO_EXIT);
@@ -235,7 +242,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     var visited = 0u;
     var current = first_unvisited(&ivs, n, visited);
-    while current < n {
+    while current < n && work() {
         let f = current;
         visited |= 1u << f;
         if ivs[f].t0 <= g_best.t {
@@ -255,6 +262,9 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             }
         }
     }
+    if g_work > WORK_BUDGET {
+        g_best = Hit(UNFINISHED_ID, 0.0, 0.0, 0.0);
+    }
     hits[r] = g_best;
     stats[r] = g_stats;
 }
@@ -262,9 +272,12 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
 // The unvisited view the ray enters first (the first such on ties); n when none.
 fn first_unvisited(ivs: ptr<function, array<Interval, 6>>, n: u32, visited: u32) -> u32 {
     var best = n;
-    for (var f = 0u; f < n; f++) {
-        if (visited & (1u << f)) == 0u && !is_empty((*ivs)[f]) && (best == n || (*ivs)[f].t0 < (*ivs)[best].t0) {
+    var best_t0 = 0.0;
+    for (var f = 0u; f < n && work(); f++) {
+        let iv = (*ivs)[f];
+        if (visited & (1u << f)) == 0u && !is_empty(iv) && (best == n || iv.t0 < best_t0) {
             best = f;
+            best_t0 = iv.t0;
         }
     }
     return best;

@@ -112,13 +112,17 @@ fn intersect(ray: Ray, sh: RayShear, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
     let u = div_cr(e1, det);
     let v = div_cr(e2, det);
     let d = ray.dir;
-    var err = 0.0;
-    var size = 0.0;
-    for (var k = 0u; k < 3u; k++) {
-        let y = a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]);
-        err = fmax(err, abs(t * d[k] - y));
-        size = fmax(fmax(fmax(size, abs(a[k])), abs(b[k])), abs(c[k]));
-    }
+    // The loop over k = 0, 1, 2 of the Rust, unrolled: lavapipe caps the
+    // loop iterations of a whole invocation.
+    let y0 = a[0] + u * (b[0] - a[0]) + v * (c[0] - a[0]);
+    var err = fmax(0.0, abs(t * d[0] - y0));
+    var size = fmax(fmax(fmax(0.0, abs(a[0])), abs(b[0])), abs(c[0]));
+    let y1 = a[1] + u * (b[1] - a[1]) + v * (c[1] - a[1]);
+    err = fmax(err, abs(t * d[1] - y1));
+    size = fmax(fmax(fmax(size, abs(a[1])), abs(b[1])), abs(c[1]));
+    let y2 = a[2] + u * (b[2] - a[2]) + v * (c[2] - a[2]);
+    err = fmax(err, abs(t * d[2] - y2));
+    size = fmax(fmax(fmax(size, abs(a[2])), abs(b[2])), abs(c[2]));
     if !(err <= size * 0.000030517578125) {
         return miss;
     }

@@ -43,6 +43,8 @@ struct RayStats {
 }
 
 const INVALID_ID: u32 = 0xffffffffu;
+// dirt_gpu::UNFINISHED: the trace ran out of its work budget (work.wgsl).
+const UNFINISHED_ID: u32 = 0xfffffffeu;
 
 // WGSL has no infinity literal: make them from bits.
 fn f32_inf() -> f32 {

@@ -58,7 +58,15 @@ fn compare(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> Result<(), Te
         "list contents differ"
     );
     for trav in [Traversal::Linear, Traversal::HiZ] {
-        let (gh, gs) = dirt_gpu::trace::trace(g, &ads, rays, trav).expect("gpu trace");
+        let traced = dirt_gpu::trace::trace_report(g, &ads, rays, trav).expect("gpu trace");
+        // The CPU finishing a ray would make the comparison trivial: keep it rare.
+        prop_assert!(
+            traced.cpu_finished * 20 <= rays.len(),
+            "{} of {} rays finished on the CPU",
+            traced.cpu_finished,
+            rays.len()
+        );
+        let (gh, gs) = (traced.hits, traced.stats);
         let (ch, cs) = trace_with_stats(&cpu, tris, rays, trav);
         for i in 0..rays.len() {
             prop_assert_eq!(
@@ -132,4 +140,50 @@ fn empty_scene_builds_and_misses() {
     let rays = [Ray::new(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY)];
     let (h, _) = dirt_gpu::trace::trace(g, &ads, &rays, Traversal::Linear).expect("trace");
     assert!(!h[0].is_hit());
+}
+
+/// A ray whose walk needs more loop iterations than the GPU budget (here: a
+/// 2400-triangle list in every tile it crosses) is finished by the CPU
+/// reference, with the same hit and statistics; nothing is silently wrong.
+#[test]
+fn rays_over_the_gpu_work_budget_are_finished_exactly() {
+    let Some(g) = gpu() else { return };
+    let mut tris = Vec::new();
+    for k in 0..1200 {
+        tris.extend(dirt_tests::grid(1, 2.0, k as f32 * 1e-3));
+    }
+    // Between two layers, parallel to them: crosses many tiles, tests every list.
+    let rays = [
+        Ray::new(
+            Vec3::new(-3.0, 0.1, 0.60051),
+            Vec3::new(1.0, 0.01, 0.0),
+            0.0,
+            f32::INFINITY,
+        ),
+        Ray::new(Vec3::new(0.1, 0.2, 5.0), -Vec3::Z, 0.0, f32::INFINITY),
+    ];
+    let params = AdsParams {
+        views: ViewsKind::Cube,
+        resolution: 16,
+        buckets: 1,
+        tile: 1,
+        center: None,
+    };
+    let cpu = Ads::build(&tris, &params).expect("cpu build");
+    let ads = GpuAds::build(g, &tris, &params).expect("gpu build");
+    let traced = dirt_gpu::trace::trace_report(g, &ads, &rays, Traversal::Linear).expect("trace");
+    let (ch, cs) = trace_with_stats(&cpu, &tris, &rays, Traversal::Linear);
+    assert!(
+        traced.cpu_finished >= 1,
+        "the test ray should exceed the budget (tests {})",
+        cs[0].tests
+    );
+    for i in 0..rays.len() {
+        assert_eq!(traced.hits[i].bits(), ch[i].bits());
+        assert_eq!(traced.stats[i], cs[i]);
+    }
+    assert_eq!(
+        ch[1].bits(),
+        dirt_cpu::brute_force::trace(&tris, &rays[1..])[0].bits()
+    );
 }

@@ -403,9 +403,17 @@ fn bench_gpu(
     let mut rows = Vec::new();
     for (cpu, traversal) in cpu_results.iter().zip(TRAVERSALS) {
         eprintln!("gpu: trace {} x {k}", traversal_name(traversal));
-        let (ms, (hits, stats)) = timed(k, || {
-            dirt_gpu::trace::trace(gpu, &ads, rays, traversal).context("cannot trace")
+        let (ms, traced) = timed(k, || {
+            dirt_gpu::trace::trace_report(gpu, &ads, rays, traversal).context("cannot trace")
         })?;
+        if traced.cpu_finished > 0 {
+            eprintln!(
+                "gpu: {} of {} rays spent their GPU work budget and were finished by the CPU reference (included in the time)",
+                traced.cpu_finished,
+                rays.len()
+            );
+        }
+        let (hits, stats) = (traced.hits, traced.stats);
         if hits.len() != rays.len() {
             bail!(
                 "the GPU returned {} hits for {} rays",

@@ -399,8 +399,15 @@ fn trace_gpu(
 ) -> Result<Traced> {
     let (gpu_ads, build_time) = build_gpu_ads(gpu, scene, ads)?;
     let start = Instant::now();
-    let (hits, _stats) = dirt_gpu::trace::trace(gpu, &gpu_ads, rays, traversal)
+    let traced = dirt_gpu::trace::trace_report(gpu, &gpu_ads, rays, traversal)
         .with_context(|| format!("cannot trace on the GPU ({})", gpu.describe()))?;
+    if traced.cpu_finished > 0 {
+        eprintln!(
+            "gpu: {} rays spent their GPU work budget and were finished by the CPU reference",
+            traced.cpu_finished
+        );
+    }
+    let hits = traced.hits;
     let t = gpu_ads.timings;
     let stages = BuildTimings {
         fill_depth: t.fill_depth,

@@ -175,6 +175,10 @@ pub struct GpuAds {
     /// `views·tiles²·B + 1` offsets after the scan.
     pub(crate) offsets: wgpu::Buffer,
     pub(crate) ids: wgpu::Buffer,
+    /// The triangles, kept to finish rays the GPU could not (see [`trace::trace`]).
+    pub(crate) triangles: Vec<Triangle>,
+    /// The CPU reference structure, built on first need.
+    pub(crate) cpu: std::sync::OnceLock<dirt_cpu::Ads>,
 }
 
 /// Checks that one binding of `bytes` fits the adapter.
@@ -346,6 +350,8 @@ impl GpuAds {
             hiz,
             offsets,
             ids,
+            triangles: tris.to_vec(),
+            cpu: std::sync::OnceLock::new(),
         })
     }
 

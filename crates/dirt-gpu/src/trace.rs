@@ -1,5 +1,11 @@
 //! Pass `trace` (`trace.wgsl`): one compute thread per ray, ray buffer in, hit
 //! buffer out, in chunks that fit one binding. Mirrors `dirt_cpu::trace`.
+//!
+//! Each ray has a budget of loop iterations (`work.wgsl`): lavapipe silently
+//! ends all loops of an invocation after 65535 iterations. A ray that spends
+//! its budget comes back marked [`UNFINISHED`] and is traced again here by the
+//! CPU reference, whose hits and statistics are the GPU's bit for bit; the
+//! number of such rays is reported.
 
 use crate::fill_primitives::grid;
 use crate::{
@@ -13,6 +19,9 @@ use dirt_math::{Hit, Ray, RayStats};
 /// submission short.
 const CHUNK: usize = 1 << 18;
 
+/// The primitive id the shader writes for a ray that ran out of its work budget.
+pub const UNFINISHED: u32 = 0xffff_fffe;
+
 /// Closest hits and per-ray statistics of `rays`.
 pub fn trace(
     gpu: &Gpu,
@@ -20,14 +29,56 @@ pub fn trace(
     rays: &[Ray],
     traversal: Traversal,
 ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
-    let mut hits = Vec::with_capacity(rays.len());
-    let mut stats = Vec::with_capacity(rays.len());
+    let t = trace_report(gpu, ads, rays, traversal)?;
+    Ok((t.hits, t.stats))
+}
+
+/// What [`trace_report`] returns.
+#[derive(Clone, Debug, Default)]
+pub struct Traced {
+    pub hits: Vec<Hit>,
+    pub stats: Vec<RayStats>,
+    /// Rays the GPU left unfinished (work budget spent) that the CPU reference traced.
+    pub cpu_finished: usize,
+}
+
+/// [`trace`], also saying how many rays the CPU reference had to finish.
+pub fn trace_report(
+    gpu: &Gpu,
+    ads: &GpuAds,
+    rays: &[Ray],
+    traversal: Traversal,
+) -> Result<Traced, GpuError> {
+    let mut out = Traced {
+        hits: Vec::with_capacity(rays.len()),
+        stats: Vec::with_capacity(rays.len()),
+        cpu_finished: 0,
+    };
     for chunk in rays.chunks(CHUNK) {
         let (h, s) = trace_chunk(gpu, ads, chunk, traversal)?;
-        hits.extend(h);
-        stats.extend(s);
+        out.hits.extend(h);
+        out.stats.extend(s);
     }
-    Ok((hits, stats))
+    let unfinished: Vec<usize> = (0..rays.len())
+        .filter(|&i| out.hits[i].prim == UNFINISHED)
+        .collect();
+    if !unfinished.is_empty() {
+        let cpu = match ads.cpu.get() {
+            Some(c) => c,
+            None => {
+                let built = dirt_cpu::Ads::build(&ads.triangles, &ads.params)?;
+                ads.cpu.get_or_init(|| built)
+            }
+        };
+        let again: Vec<Ray> = unfinished.iter().map(|&i| rays[i]).collect();
+        let (h, s) = dirt_cpu::trace_with_stats(cpu, &ads.triangles, &again, traversal);
+        for (k, &i) in unfinished.iter().enumerate() {
+            out.hits[i] = h[k];
+            out.stats[i] = s[k];
+        }
+        out.cpu_finished = unfinished.len();
+    }
+    Ok(out)
 }
 
 fn trace_chunk(

@@ -88,18 +88,23 @@ pub fn div_cr(a: f32, b: f32) -> f32 {
         return f32::from_bits(sign | DIV_INF);
     }
 
-    // Restoring long division: q = floor(ma / mb * 2^25) in [2^25, 2^26).
-    // Invariant: r < 2 * mb < 2^25 before each compare.
-    let mut q: u32 = 0;
-    let mut r = ma;
-    for _i in 0..26u32 {
-        q <<= 1;
-        if r >= mb {
-            r -= mb;
-            q |= 1;
-        }
-        r <<= 1;
-    }
+    // Long division in integer steps, no loop (a software GPU caps the loop
+    // iterations of a whole invocation): q = floor(ma / mb * 2^25) in
+    // [2^25, 2^26). The remainder stays below mb < 2^24, so r << 8 fits.
+    let mut q = ma / mb; // 1
+    let mut r = ma % mb;
+    r <<= 8;
+    q = (q << 8) | (r / mb);
+    r %= mb;
+    r <<= 8;
+    q = (q << 8) | (r / mb);
+    r %= mb;
+    r <<= 8;
+    q = (q << 8) | (r / mb);
+    r %= mb;
+    r <<= 1;
+    q = (q << 1) | (r / mb);
+    r %= mb;
     let sticky = r != 0; // bits below q's last are nonzero
 
     // Drop s bits: 2 for a normal result (e >= 1), 2 + (1 - e) for a

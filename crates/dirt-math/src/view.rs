@@ -285,7 +285,8 @@ impl ViewSet {
 }
 
 /// Near distance for views centred at `c`: small against the scene, large
-/// against the dilation (2^-8 of the scale, 256 times `EPS_REL`).
+/// against the dilations (2^-5 of the scale: 128 times a ray's `EPS_RAY_REL`
+/// share, so the walk's dilation near the centre stays under a tile or so).
 fn near_distance(c: Vec3, bounds: &Aabb) -> f32 {
     let mut scale: f32 = 0.0;
     for p in corners(bounds) {
@@ -294,7 +295,7 @@ fn near_distance(c: Vec3, bounds: &Aabb) -> f32 {
     if !(scale > 0.0) || !scale.is_finite() {
         scale = 1.0;
     }
-    scale * (1.0 / 256.0)
+    scale * (1.0 / 32.0)
 }
 
 #[cfg(test)]
