@@ -187,3 +187,26 @@ fn rays_over_the_gpu_work_budget_are_finished_exactly() {
         dirt_cpu::brute_force::trace(&tris, &rays[1..])[0].bits()
     );
 }
+
+/// A structure larger than one binding allows is refused before any work,
+/// with the sizes in the message: never truncated.
+#[test]
+fn oversized_structure_is_a_clear_error() {
+    let Some(g) = gpu() else { return };
+    let tris = random_scene(1, 10, 1.0);
+    let params = AdsParams {
+        views: ViewsKind::Cube,
+        resolution: 2048,
+        buckets: 64,
+        tile: 1,
+        center: None,
+    };
+    match GpuAds::build(g, &tris, &params) {
+        Err(dirt_gpu::GpuError::TooLarge { what, bytes, limit }) => {
+            assert!(bytes > limit, "{what}: {bytes} <= {limit}");
+            let msg = dirt_gpu::GpuError::TooLarge { what, bytes, limit }.to_string();
+            assert!(msg.contains("max_storage_buffer_binding_size"), "{msg}");
+        }
+        other => panic!("expected TooLarge, got {other:?}"),
+    }
+}
