@@ -22,33 +22,36 @@ fn bucket_span(c: Covered) -> vec3<u32> {
     return vec3<u32>(bucket_of(c.lo, zmin, zmax, params.buckets), bucket_of(c.hi, zmin, zmax, params.buckets), 1u);
 }
 
-@fragment
-fn count(in: CoverOut) {
+// The lists (first, last) a covered fragment's triangle belongs to; z == 0 when none.
+fn fragment_lists(in: CoverOut) -> vec3<u32> {
     let c = covered(in);
     if !c.ok {
-        return;
+        return vec3<u32>(0u, 0u, 0u);
     }
     let b = bucket_span(c);
-    if b.z == 0u {
+    let base = c.tile * params.buckets;
+    return vec3<u32>(base + b.x, base + b.y, b.z);
+}
+
+@fragment
+fn count(in: CoverOut) {
+    let l = fragment_lists(in);
+    if l.z == 0u {
         return;
     }
-    for (var k = b.x; k <= b.y; k++) {
-        atomicAdd(&lists[c.tile * params.buckets + k], 1u);
+    for (var k = l.x; k <= l.y; k++) {
+        atomicAdd(&lists[k], 1u);
     }
 }
 
 @fragment
 fn fill(in: CoverOut) {
-    let c = covered(in);
-    if !c.ok {
+    let l = fragment_lists(in);
+    if l.z == 0u {
         return;
     }
-    let b = bucket_span(c);
-    if b.z == 0u {
-        return;
-    }
-    for (var k = b.x; k <= b.y; k++) {
-        let at = atomicAdd(&lists[c.tile * params.buckets + k], 1u);
+    for (var k = l.x; k <= l.y; k++) {
+        let at = atomicAdd(&lists[k], 1u);
         ids[at] = in.prim;
     }
 }
