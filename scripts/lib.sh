@@ -59,4 +59,4 @@ ensure_rust() {
 # independent check, Vulkan (lavapipe) for the GPU tests, and real assets.
 TEST_PACKAGES=(ca-certificates curl gcc libc6-dev python3 python3-numpy mesa-vulkan-drivers libvulkan1 assimp-testmodels)
 # What `scripts/run` needs.
-RUN_PACKAGES=(ca-certificates curl gcc libc6-dev python3 python3-numpy)
+RUN_PACKAGES=(ca-certificates curl gcc libc6-dev python3 python3-numpy mesa-vulkan-drivers libvulkan1)
