@@ -67,6 +67,21 @@ fn dirt_err(args: &[&str]) -> String {
     stderr
 }
 
+/// `dirt rays SCENE --out PATH --count N --seed S`.
+fn write_rays(path: &Path, count: u32, seed: u32) {
+    let (count, seed) = (count.to_string(), seed.to_string());
+    dirt_ok(&[
+        "rays",
+        SCENE,
+        "--out",
+        s(path),
+        "--count",
+        &count,
+        "--seed",
+        &seed,
+    ]);
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")
 }
@@ -130,16 +145,7 @@ fn cpu_hits_equal_brute_force_hits_byte_for_byte() {
         dir.path("cpu.npy"),
         dir.path("brute.npy"),
     );
-    dirt_ok(&[
-        "rays",
-        SCENE,
-        "--out",
-        s(&rays),
-        "--count",
-        "20000",
-        "--seed",
-        "7",
-    ]);
+    write_rays(&rays, 20000, 7);
     assert_eq!(npy_header(&rays), (vec![20000, 8], "'<f4'".to_owned()));
 
     let (_, log) = dirt_ok(&[
@@ -204,16 +210,7 @@ fn cpu_hits_equal_brute_force_hits_byte_for_byte() {
 fn other_traversal_and_views_agree_with_brute_force() {
     let dir = TestDir::new("variants");
     let (rays, brute) = (dir.path("rays.npy"), dir.path("brute.npy"));
-    dirt_ok(&[
-        "rays",
-        SCENE,
-        "--out",
-        s(&rays),
-        "--count",
-        "3000",
-        "--seed",
-        "11",
-    ]);
+    write_rays(&rays, 3000, 11);
     dirt_ok(&[
         "trace",
         SCENE,
@@ -276,16 +273,7 @@ fn numpy_check_accepts_the_hits() {
         dir.path("hits.npy"),
     );
     dirt_ok(&["triangles", SCENE, "--out", s(&tris)]);
-    dirt_ok(&[
-        "rays",
-        SCENE,
-        "--out",
-        s(&rays),
-        "--count",
-        "5000",
-        "--seed",
-        "13",
-    ]);
+    write_rays(&rays, 5000, 13);
     dirt_ok(&["trace", SCENE, "--rays", s(&rays), "--out", s(&hits)]);
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/python/check_hits.py");
     let out = Command::new(python)
@@ -568,16 +556,7 @@ fn gpu_hits_equal_cpu_hits_byte_for_byte() {
         dir.path("cpu.npy"),
         dir.path("gpu.npy"),
     );
-    dirt_ok(&[
-        "rays",
-        SCENE,
-        "--out",
-        s(&rays),
-        "--count",
-        "2000",
-        "--seed",
-        "5",
-    ]);
+    write_rays(&rays, 2000, 5);
     dirt_ok(&[
         "trace",
         SCENE,
