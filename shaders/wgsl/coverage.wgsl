@@ -46,7 +46,7 @@ fn cover_vs(@builtin(vertex_index) vi: u32, @builtin(instance_index) view: u32) 
     // Outside the viewport: no fragments.
     out.pos = vec4<f32>(-2.0, -2.0, 0.0, 1.0);
     let v = views[view];
-    if v.has_content == 0u || prim >= params.n_tris {
+    if v.slot == NO_SLOT || prim >= params.n_tris {
         return out;
     }
     let r = polygon_tile_range(v, view_polygon(v, prim));
@@ -77,6 +77,6 @@ fn covered(in: CoverOut) -> Covered {
     let i = u32(in.pos.x);
     let j = u32(in.pos.y);
     let e = tile_depth_extent(v, view_polygon(v, in.prim), i, j);
-    let tile = in.view * tile_count(v) + j * v.tiles + i;
+    let tile = v.slot * tile_count(v) + j * v.tiles + i;
     return Covered(e.ok, tile, e.lo, e.hi);
 }

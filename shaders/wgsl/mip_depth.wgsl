@@ -16,7 +16,7 @@ struct MipParams {
 fn mip_depth(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     let j = gid.y;
-    let view = gid.z;
+    let slot = gid.z; // views with content only: one block each
     let w = mip.dst_w;
     let sw = mip.src_w;
     if i >= w || j >= w {
@@ -28,12 +28,12 @@ fn mip_depth(@builtin(global_invocation_id) gid: vec3<u32>) {
         let si = 2u * i + (k & 1u);
         let sj = 2u * j + (k >> 1u);
         if si < sw && sj < sw {
-            let s = mip.src_base + view * sw * sw + sj * sw + si;
+            let s = mip.src_base + slot * sw * sw + sj * sw + si;
             lo = min(lo, hiz[2u * s]);
             hi = max(hi, hiz[2u * s + 1u]);
         }
     }
-    let d = mip.dst_base + view * w * w + j * w + i;
+    let d = mip.dst_base + slot * w * w + j * w + i;
     hiz[2u * d] = lo;
     hiz[2u * d + 1u] = hi;
 }

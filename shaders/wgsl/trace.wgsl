@@ -19,7 +19,7 @@ struct TraceParams {
     buckets: u32,
     levels: u32,
     traversal: u32, // 0 = linear, 1 = Hi-Z
-    _pad0: u32,
+    n_slots: u32, // views with content: blocks per Hi-Z level
     _pad1: u32,
 }
 
@@ -64,9 +64,9 @@ fn depth_span(vr: ViewRay, iv: Interval) -> vec2<f32> {
     return vec2<f32>(fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps);
 }
 
-fn visit_tile(view: u32, v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
+fn visit_tile(v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
     g_stats.tiles += 1u;
-    let tile = view * tile_count(v) + (j * v.tiles + i);
+    let tile = v.slot * tile_count(v) + (j * v.tiles + i);
     let zmin = ordered_to_f32(hiz[2u * tile]);
     let zmax = ordered_to_f32(hiz[2u * tile + 1u]);
     let span = depth_span(vr, iv);
@@ -102,7 +102,7 @@ fn visit_tile(view: u32, v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
 }
 
 // dirt_math::dda::walk_tiles with the visitor of dirt_cpu::trace::linear.
-fn linear(view: u32, v: View, vr: ViewRay, iv: Interval) {
+fn linear(v: View, vr: ViewRay, iv: Interval) {
     if is_empty(iv) || v.tiles == 0u {
         return;
     }
@@ -142,7 +142,7 @@ fn linear(view: u32, v: View, vr: ViewRay, iv: Interval) {
                         if !is_empty(span) {
                             let i = select(m, k, major == 0u);
                             let j = select(k, m, major == 0u);
-                            visit_tile(view, v, vr, i, j, span);
+                            visit_tile(v, vr, i, j, span);
                         }
                     }
                 }
@@ -153,7 +153,7 @@ fn linear(view: u32, v: View, vr: ViewRay, iv: Interval) {
 }
 
 // dirt_cpu::trace::hiz
-fn hiz_walk(view: u32, v: View, vr: ViewRay, iv: Interval) {
+fn hiz_walk(v: View, vr: ViewRay, iv: Interval) {
     let levels = params.levels;
     let dir = projected_direction(v, vr, iv);
     var stack: array<vec3<u32>, 64>;
@@ -169,7 +169,7 @@ fn hiz_walk(view: u32, v: View, vr: ViewRay, iv: Interval) {
             continue;
         }
         let w = g_level_width[level];
-        let at = g_level_base[level] + view * w * w + cell.z * w + cell.y;
+        let at = g_level_base[level] + v.slot * w * w + cell.z * w + cell.y;
         let zmin = ordered_to_f32(hiz[2u * at]);
         let zmax = ordered_to_f32(hiz[2u * at + 1u]);
         let span = depth_span(vr, civ);
@@ -177,7 +177,7 @@ fn hiz_walk(view: u32, v: View, vr: ViewRay, iv: Interval) {
             continue;
         }
         if level == 0u {
-            visit_tile(view, v, vr, cell.y, cell.z, civ);
+            visit_tile(v, vr, cell.y, cell.z, civ);
             continue;
         }
         let cw = g_level_width[level - 1u];
@@ -222,7 +222,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     for (var l = 0u; l < params.levels && work(); l++) {
         g_level_base[l] = base;
         g_level_width[l] = width;
-        base += params.n_views * width * width;
+        base += params.n_slots * width * width;
         width = (width + 1u) / 2u;
     }
     let n = params.n_views;
@@ -233,7 +233,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         let v = views[f];
         let vr = view_ray(v, ray);
         var c = ViewClip(interval_empty(), NO_EXIT);
-        if v.has_content != 0u {
+        if v.slot != NO_SLOT {
             c = clip_ray_to_view(v, vr, ray.tmin, ray.tmax);
         }
         vrs[f] = vr;
@@ -248,9 +248,9 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         if ivs[f].t0 <= g_best.t {
             g_stats.views += 1u;
             if params.traversal == 0u {
-                linear(f, views[f], vrs[f], ivs[f]);
+                linear(views[f], vrs[f], ivs[f]);
             } else {
-                hiz_walk(f, views[f], vrs[f], ivs[f]);
+                hiz_walk(views[f], vrs[f], ivs[f]);
             }
         }
         // Across the edge the ray leaves through, else the next view it enters.

@@ -30,7 +30,8 @@ struct View {
     tiles: u32,
     step: f32,
     scale: f32,
-    has_content: u32,
+    // View::slot: this view's block in the per-tile buffers; NO_SLOT = no content.
+    slot: u32,
     adjacency: vec4<u32>,
 }
 
@@ -43,6 +44,8 @@ struct RayStats {
 }
 
 const INVALID_ID: u32 = 0xffffffffu;
+// dirt_math::view::NO_SLOT
+const NO_SLOT: u32 = 0xffffffffu;
 // dirt_gpu::UNFINISHED: the trace ran out of its work budget (work.wgsl).
 const UNFINISHED_ID: u32 = 0xfffffffeu;
 

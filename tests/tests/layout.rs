@@ -63,7 +63,7 @@ fn shared_structs_match_their_wgsl() {
             tiles,
             step,
             scale,
-            has_content,
+            slot,
             adjacency
         }),
     );
@@ -87,7 +87,7 @@ fn shared_structs_match_their_wgsl() {
             buckets,
             levels,
             traversal,
-            _pad0,
+            n_slots,
             _pad1
         }),
     );

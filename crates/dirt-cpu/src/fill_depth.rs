@@ -2,9 +2,10 @@
 //! `[zmin, zmax]` of every triangle part inside the tile's frustum.
 //!
 //! Output layout (the GPU pass writes the same bytes): for view `v` and tile
-//! `(i, j)`, entry `v·tiles² + j·tiles + i` holds `[enc(zmin), enc(zmax)]` with
+//! `(i, j)`, entry `s·tiles² + j·tiles + i` with `s = v.slot` holds `[enc(zmin), enc(zmax)]` with
 //! the order-preserving encoding of `dirt_math::encode`; an empty tile holds
-//! `[enc(+inf), enc(-inf)]`. Updates are atomic min/max, as on the GPU.
+//! `[enc(+inf), enc(-inf)]`. Views without content have no slot, no entries
+//! and no pass. Updates are atomic min/max, as on the GPU.
 
 use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF, f32_to_ordered};
@@ -14,8 +15,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Depth bounds of every tile of every view, encoded.
 pub fn fill_depth(views: &ViewSet, tris: &[Triangle]) -> Vec<[u32; 2]> {
-    let per_view: Vec<usize> = views.views.iter().map(|v| v.tile_count()).collect();
-    let total: usize = per_view.iter().sum();
+    let per_view = views.views.first().map_or(0, |v| v.tile_count());
+    let total = views.slots() * per_view;
     let bounds: Vec<[AtomicU32; 2]> = (0..total)
         .map(|_| {
             [
@@ -24,9 +25,9 @@ pub fn fill_depth(views: &ViewSet, tris: &[Triangle]) -> Vec<[u32; 2]> {
             ]
         })
         .collect();
-    let mut base = 0;
-    for (v, &count) in views.views.iter().zip(&per_view) {
+    for v in &views.views {
         if v.has_content {
+            let base = v.slot as usize * per_view;
             let tiles = v.tiles as usize;
             tris.par_iter().for_each(|t| {
                 let tv = [
@@ -41,7 +42,6 @@ pub fn fill_depth(views: &ViewSet, tris: &[Triangle]) -> Vec<[u32; 2]> {
                 });
             });
         }
-        base += count;
     }
     bounds
         .into_iter()

@@ -4,7 +4,7 @@
 //! Sized exactly by counting (count, exclusive prefix sum, fill): there is no
 //! fixed pool, so nothing can be dropped. Lists are stored contiguously
 //! (`offsets`, `ids`); list `(v, tile, b)` with flat index
-//! `(v·tiles² + j·tiles + i)·B + b` is `ids[offsets[k]..offsets[k+1]]`.
+//! `(s·tiles² + j·tiles + i)·B + b` (`s` the view's slot) is `ids[offsets[k]..offsets[k+1]]`.
 //! The fill uses atomic cursors, as the GPU does, so the order inside a list is
 //! arbitrary; the CPU sorts each list afterwards so its structure is reproducible.
 
@@ -39,10 +39,10 @@ fn for_each_list(
     t: &Triangle,
     mut f: impl FnMut(usize),
 ) {
-    let mut base = 0usize;
     for v in &views.views {
         let tiles = v.tiles as usize;
         if v.has_content {
+            let base = v.slot as usize * v.tile_count();
             let tv = [
                 v.to_view(t.vertex(0)),
                 v.to_view(t.vertex(1)),
@@ -60,7 +60,6 @@ fn for_each_list(
                 }
             });
         }
-        base += v.tile_count();
     }
 }
 

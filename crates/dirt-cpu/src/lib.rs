@@ -21,6 +21,7 @@ pub use dirt_math::types::RayStats;
 pub use fill_primitives::IdLists;
 pub use trace::{trace, trace_with_stats};
 
+use dirt_math::clip::{clip_triangle_to_view, polygon_tile_range};
 use dirt_math::dda::hiz_width;
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::{Aabb, Triangle, Vec3, ViewSet};
@@ -131,7 +132,46 @@ impl BuildTimings {
 }
 
 /// Checks `params` and `tris` and makes the view set both backends build over.
+///
+/// Views that no triangle reaches (see [`views_reached`]) are left out: they
+/// get no build passes and no memory, and rays skip them. That changes no hit.
 pub fn views_for(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CpuError> {
+    let mut views = views_for_all(tris, params)?;
+    let keep = views_reached(&views, tris);
+    views.leave_out(&keep);
+    Ok(views)
+}
+
+/// Which views at least one triangle reaches: the triangle, clipped to the
+/// view's (dilated) frustum, is not empty and has a tile range. This is the
+/// gate `fill_depth` and `fill_primitives` pass before their per-tile tests,
+/// so a view that fails it for every triangle has no covered tile, and no
+/// hit can lie in it.
+pub fn views_reached(views: &ViewSet, tris: &[Triangle]) -> Vec<bool> {
+    use rayon::prelude::*;
+    views
+        .views
+        .iter()
+        .map(|v| {
+            v.has_content
+                && tris.par_iter().any(|t| {
+                    let tv = [
+                        v.to_view(t.vertex(0)),
+                        v.to_view(t.vertex(1)),
+                        v.to_view(t.vertex(2)),
+                    ];
+                    clip_triangle_to_view(v, tv)
+                        .and_then(|p| polygon_tile_range(v, &p))
+                        .is_some()
+                })
+        })
+        .collect()
+}
+
+/// [`views_for`] without leaving out the views no triangle reaches: every
+/// view whose frustum meets the scene bounds is built (the papers'
+/// configuration; the baseline that leaving out is measured against).
+pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CpuError> {
     params.validate()?;
     if let Some(index) = tris.iter().position(|t| !t.is_finite()) {
         return Err(CpuError::NonFiniteTriangle { index });
@@ -164,9 +204,18 @@ pub struct Ads {
 }
 
 impl Ads {
-    /// Builds the structure: `fill_depth`, `mip_depth`, `fill_primitives`.
+    /// Builds the structure: `fill_depth`, `mip_depth`, `fill_primitives`,
+    /// over the views of [`views_for`] (views no triangle reaches left out).
     pub fn build(tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
-        let views = views_for(tris, params)?;
+        Self::build_over(views_for(tris, params)?, tris, params)
+    }
+
+    /// [`Ads::build`] over every view of [`views_for_all`]: nothing left out.
+    pub fn build_all_views(tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
+        Self::build_over(views_for_all(tris, params)?, tris, params)
+    }
+
+    fn build_over(views: ViewSet, tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
         let t0 = Instant::now();
         let depth = fill_depth::fill_depth(&views, tris);
         let t1 = Instant::now();
@@ -230,7 +279,8 @@ impl Ads {
     /// Memory of each structure, next to the model of 001 Table 3.
     pub fn memory(&self) -> MemoryReport {
         let tiles = self.params.tiles() as u64;
-        let views = self.views.views.len() as u64;
+        // Views without content store nothing; the model counts the views stored.
+        let views = self.views.slots() as u64;
         let nb = self.params.buckets as u64;
         let nodes = self.lists.ids.len() as u64;
         let depth = views * tiles * tiles * 8;

@@ -2,7 +2,8 @@
 //! level `l`, the min of the mins and the max of the maxes (blocks cut at the
 //! grid's edge). Level 0 is the output of `fill_depth`.
 //!
-//! Layout of each level: view-major, then row-major cells, `[enc(zmin), enc(zmax)]`.
+//! Layout of each level: one block per view with content, in slot order
+//! ([`dirt_math::View::slot`]), then row-major cells, `[enc(zmin), enc(zmax)]`.
 
 use dirt_math::ViewSet;
 use dirt_math::dda::{hiz_levels, hiz_width};
@@ -11,7 +12,7 @@ use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF};
 /// All levels, level 0 first (a copy of `depth`).
 pub fn mip_depth(views: &ViewSet, depth: &[[u32; 2]]) -> Vec<Vec<[u32; 2]>> {
     let tiles = views.views.first().map_or(1, |v| v.tiles);
-    let n_views = views.views.len();
+    let n_views = views.slots();
     let levels = hiz_levels(tiles);
     let mut out = vec![depth.to_vec()];
     for l in 1..levels {

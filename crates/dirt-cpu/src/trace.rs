@@ -110,8 +110,8 @@ pub fn trace_ray(
             s.views += 1;
             ctx.stats.set(s);
             match traversal {
-                Traversal::Linear => linear(&ctx, f, &views[f], &vrs[f], ivs[f]),
-                Traversal::HiZ => hiz(&ctx, f, &views[f], &vrs[f], ivs[f]),
+                Traversal::Linear => linear(&ctx, &views[f], &vrs[f], ivs[f]),
+                Traversal::HiZ => hiz(&ctx, &views[f], &vrs[f], ivs[f]),
             }
         }
         // Across the edge the ray leaves through, else the next view it enters.
@@ -124,14 +124,14 @@ pub fn trace_ray(
     ctx.best.get()
 }
 
-fn linear(ctx: &Ctx<'_>, view: usize, v: &View, vr: &ViewRay, iv: Interval) {
+fn linear(ctx: &Ctx<'_>, v: &View, vr: &ViewRay, iv: Interval) {
     walk_tiles(v, vr, iv, &mut || ctx.best.get().t, &mut |span| {
-        visit_tile(ctx, view, v, vr, span.i, span.j, span.iv);
+        visit_tile(ctx, v, vr, span.i, span.j, span.iv);
         Walk::Continue
     });
 }
 
-fn hiz(ctx: &Ctx<'_>, view: usize, v: &View, vr: &ViewRay, iv: Interval) {
+fn hiz(ctx: &Ctx<'_>, v: &View, vr: &ViewRay, iv: Interval) {
     let levels = ctx.ads.hiz.len() as u32;
     let (dx, dy) = projected_direction(v, vr, &iv);
     let order = child_order(dx, dy);
@@ -148,15 +148,15 @@ fn hiz(ctx: &Ctx<'_>, view: usize, v: &View, vr: &ViewRay, iv: Interval) {
             continue;
         }
         let w = ctx.ads.hiz_width(cell.level);
-        let [zmin, zmax] =
-            ctx.ads.hiz[cell.level as usize][view * w * w + cell.j as usize * w + cell.i as usize];
+        let [zmin, zmax] = ctx.ads.hiz[cell.level as usize]
+            [v.slot as usize * w * w + cell.j as usize * w + cell.i as usize];
         let (zmin, zmax) = (ordered_to_f32(zmin), ordered_to_f32(zmax));
         let (lo, hi) = depth_span(vr, civ);
         if !(hi >= zmin && lo <= zmax) {
             continue;
         }
         if cell.level == 0 {
-            visit_tile(ctx, view, v, vr, cell.i, cell.j, civ);
+            visit_tile(ctx, v, vr, cell.i, cell.j, civ);
             continue;
         }
         let cw = ctx.ads.hiz_width(cell.level - 1) as u32;
@@ -181,10 +181,10 @@ fn depth_span(vr: &ViewRay, iv: Interval) -> (f32, f32) {
     (fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps)
 }
 
-fn visit_tile(ctx: &Ctx<'_>, view: usize, v: &View, vr: &ViewRay, i: u32, j: u32, iv: Interval) {
+fn visit_tile(ctx: &Ctx<'_>, v: &View, vr: &ViewRay, i: u32, j: u32, iv: Interval) {
     let mut st = ctx.stats.get();
     st.tiles += 1;
-    let tile = view * v.tile_count() + (j * v.tiles + i) as usize;
+    let tile = v.slot as usize * v.tile_count() + (j * v.tiles + i) as usize;
     let [zmin, zmax] = ctx.ads.depth()[tile];
     let (zmin, zmax) = (ordered_to_f32(zmin), ordered_to_f32(zmax));
     let (lo, hi) = depth_span(vr, iv);

@@ -36,12 +36,14 @@ pub(crate) fn tile_target(gpu: &Gpu, tiles: u32) -> wgpu::TextureView {
         .create_view(&Default::default())
 }
 
-/// Draws the coverage quads of every (view, triangle) with `pipeline` and `bind`.
+/// Draws the coverage quads of every (view, triangle) with `pipeline` and
+/// `bind`, for the views in `content` only (views without content get no draw).
 pub(crate) fn draw_coverage(
     gpu: &Gpu,
     pipeline: &wgpu::RenderPipeline,
     bind: &wgpu::BindGroup,
     build: &BuildParams,
+    content: &[u32],
 ) {
     let target = tile_target(gpu, build.tiles);
     let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -64,7 +66,9 @@ pub(crate) fn draw_coverage(
         });
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind, &[]);
-        pass.draw(0..build.n_tris * 6, 0..build.n_views);
+        for &v in content {
+            pass.draw(0..build.n_tris * 6, v..v + 1);
+        }
     }
     gpu.queue.submit([enc.finish()]);
 }
@@ -76,6 +80,7 @@ pub(crate) fn fill_depth(
     build_uniform: &wgpu::Buffer,
     hiz: &wgpu::Buffer,
     build: &BuildParams,
+    content: &[u32],
 ) -> Result<(), GpuError> {
     if build.n_tris == 0 {
         return Ok(());
@@ -87,6 +92,6 @@ pub(crate) fn fill_depth(
         &p.get_bind_group_layout(0),
         &[(0, tris), (1, views), (2, build_uniform), (3, hiz)],
     );
-    draw_coverage(gpu, p, &bind, build);
+    draw_coverage(gpu, p, &bind, build, content);
     gpu.wait()
 }

@@ -98,6 +98,7 @@ pub(crate) fn fill_primitives(
     build_uniform: &wgpu::Buffer,
     hiz: &wgpu::Buffer,
     build: &BuildParams,
+    content: &[u32],
     n_lists: u64,
 ) -> Result<(wgpu::Buffer, wgpu::Buffer, u32), GpuError> {
     // Counts, then (after the scan) offsets; one extra zero so offsets[n_lists] is the total.
@@ -121,7 +122,7 @@ pub(crate) fn fill_primitives(
                 (4, &lists),
             ],
         );
-        draw_coverage(gpu, p, &bind, build);
+        draw_coverage(gpu, p, &bind, build, content);
     }
     scan(gpu, &lists, n_lists + 1)?;
     let total = bytemuck::pod_read_unaligned::<u32>(&read_back(gpu, &lists, n_lists * 4, 4)?);
@@ -156,7 +157,7 @@ pub(crate) fn fill_primitives(
                 (5, &ids),
             ],
         );
-        draw_coverage(gpu, p, &bind, build);
+        draw_coverage(gpu, p, &bind, build, content);
         gpu.wait()?;
     }
     Ok((lists, ids, total))

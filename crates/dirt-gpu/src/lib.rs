@@ -172,7 +172,7 @@ pub struct GpuAds {
     pub(crate) views_uniform: wgpu::Buffer,
     /// All Hi-Z levels, level 0 (the depth bounds) first; two u32 per cell.
     pub(crate) hiz: wgpu::Buffer,
-    /// `views·tiles²·B + 1` offsets after the scan.
+    /// `slots·tiles²·B + 1` offsets after the scan (views without content have none).
     pub(crate) offsets: wgpu::Buffer,
     pub(crate) ids: wgpu::Buffer,
     /// The triangles, kept to finish rays the GPU could not (see [`trace::trace`]).
@@ -291,6 +291,11 @@ impl GpuAds {
         let views = dirt_cpu::views_for(tris, params)?;
         let tiles = params.tiles();
         let n_views = views.views.len() as u32;
+        // Views without content get no passes and no memory: buffers hold one block per slot.
+        let n_slots = views.slots() as u32;
+        let content: Vec<u32> = (0..n_views)
+            .filter(|&v| views.views[v as usize].has_content)
+            .collect();
         let n_tris = u32::try_from(tris.len()).map_err(|_| {
             CpuError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len()))
         })?;
@@ -298,10 +303,10 @@ impl GpuAds {
         check_binding(gpu, "triangles", tris.len() as u64 * 36)?;
         let levels = hiz_levels(tiles);
         let cells: u64 = (0..levels)
-            .map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_views as u64)
+            .map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_slots as u64)
             .sum();
         check_binding(gpu, "Hi-Z pyramid", cells * 8)?;
-        let n_lists = n_views as u64 * (tiles as u64).pow(2) * params.buckets as u64;
+        let n_lists = n_slots as u64 * (tiles as u64).pow(2) * params.buckets as u64;
         check_binding(gpu, "list offsets", (n_lists + 1) * 4)?;
 
         let tri_buf = storage_init(
@@ -321,9 +326,17 @@ impl GpuAds {
         let hiz = fill_depth::new_hiz_buffer(gpu, cells)?;
 
         let t0 = Instant::now();
-        fill_depth::fill_depth(gpu, &tri_buf, &views_uniform, &build_uniform, &hiz, &build)?;
+        fill_depth::fill_depth(
+            gpu,
+            &tri_buf,
+            &views_uniform,
+            &build_uniform,
+            &hiz,
+            &build,
+            &content,
+        )?;
         let t1 = Instant::now();
-        mip_depth::mip_depth(gpu, &hiz, tiles, n_views)?;
+        mip_depth::mip_depth(gpu, &hiz, tiles, n_slots)?;
         let t2 = Instant::now();
         let (offsets, ids, nodes) = fill_primitives::fill_primitives(
             gpu,
@@ -332,6 +345,7 @@ impl GpuAds {
             &build_uniform,
             &hiz,
             &build,
+            &content,
             n_lists,
         )?;
         let t3 = Instant::now();
@@ -358,11 +372,11 @@ impl GpuAds {
     /// Hi-Z levels read back, level 0 (the depth bounds) first, in the CPU's layout.
     pub fn read_hiz(&self, gpu: &Gpu) -> Result<Vec<Vec<[u32; 2]>>, GpuError> {
         let tiles = self.params.tiles();
-        let n_views = self.views.views.len() as u64;
+        let n_slots = self.views.slots() as u64;
         let mut out = Vec::new();
         let mut base = 0u64;
         for l in 0..hiz_levels(tiles) {
-            let n = (hiz_width(tiles, l) as u64).pow(2) * n_views;
+            let n = (hiz_width(tiles, l) as u64).pow(2) * n_slots;
             let bytes = read_back(gpu, &self.hiz, base * 8, n * 8)?;
             out.push(bytemuck::pod_collect_to_vec::<u8, [u32; 2]>(&bytes));
             base += n;
@@ -372,7 +386,7 @@ impl GpuAds {
 
     /// The id lists read back (offsets and ids; ids in GPU order inside each list).
     pub fn read_lists(&self, gpu: &Gpu) -> Result<IdLists, GpuError> {
-        let n_lists = self.views.views.len() as u64
+        let n_lists = self.views.slots() as u64
             * (self.params.tiles() as u64).pow(2)
             * self.params.buckets as u64;
         let offsets = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(

@@ -8,8 +8,11 @@ pub(crate) fn mip_depth(
     gpu: &Gpu,
     hiz: &wgpu::Buffer,
     tiles: u32,
-    n_views: u32,
+    n_slots: u32,
 ) -> Result<(), GpuError> {
+    if n_slots == 0 {
+        return Ok(());
+    }
     let p = &gpu.pipelines.mip_depth;
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     let mut base = 0u32;
@@ -19,7 +22,7 @@ pub(crate) fn mip_depth(
         let dst_w = hiz_width(tiles, l);
         let params = MipParams {
             src_base: base,
-            dst_base: base + src_w * src_w * n_views,
+            dst_base: base + src_w * src_w * n_slots,
             src_w,
             dst_w,
         };
@@ -35,7 +38,7 @@ pub(crate) fn mip_depth(
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(p);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(dst_w.div_ceil(8), dst_w.div_ceil(8), n_views);
+            pass.dispatch_workgroups(dst_w.div_ceil(8), dst_w.div_ceil(8), n_slots);
         }
         uniforms.push(u);
     }

@@ -44,6 +44,7 @@ pub struct TraceParams {
     pub levels: u32,
     /// 0 = linear, 1 = Hi-Z.
     pub traversal: u32,
-    pub _pad0: u32,
+    /// Views with content ([`dirt_math::View::slot`]): blocks per Hi-Z level.
+    pub n_slots: u32,
     pub _pad1: u32,
 }

@@ -111,6 +111,7 @@ fn trace_chunk(
     let params = TraceParams {
         n_rays: n as u32,
         n_views: ads.views.views.len() as u32,
+        n_slots: ads.views.slots() as u32,
         tiles,
         buckets: ads.params.buckets,
         levels: hiz_levels(tiles),

@@ -210,7 +210,9 @@ pub struct ViewGpu {
     pub tiles: u32,
     pub step: f32,
     pub scale: f32,
-    pub has_content: u32,
+    /// [`crate::View::slot`]: the view's block in the per-tile buffers, or
+    /// [`crate::view::NO_SLOT`] for a view without content.
+    pub slot: u32,
     pub adjacency: [u32; 4],
 }
 
@@ -228,7 +230,7 @@ impl ViewGpu {
             tiles: v.tiles,
             step: v.step,
             scale: v.scale,
-            has_content: u32::from(v.has_content),
+            slot: v.slot,
             adjacency,
         }
     }

@@ -46,9 +46,19 @@ pub struct View {
     pub eps: f32,
     /// Largest |view coordinate| of the scene bounds' corners: the scale of build coordinates.
     pub scale: f32,
-    /// False when no part of the scene bounds is in front of the near plane.
+    /// False when the view can see no geometry: no part of the scene bounds
+    /// is in front of its near plane, or (after [`ViewSet::leave_out_empty`])
+    /// no triangle reaches any of its tiles. Such a view gets no build passes,
+    /// no memory, and rays skip it.
     pub has_content: bool,
+    /// Index of this view's block in the stored per-tile arrays (depth bounds,
+    /// Hi-Z levels, list offsets): views with content are numbered densely in
+    /// view order; [`NO_SLOT`] for a view without content.
+    pub slot: u32,
 }
+
+/// [`View::slot`] of a view without content.
+pub const NO_SLOT: u32 = u32::MAX;
 
 /// A ray expressed in one view's space, with its own dilation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,6 +94,7 @@ impl View {
             eps: 0.0,
             scale: near,
             has_content: false,
+            slot: NO_SLOT,
         };
         let mut far = f32::NEG_INFINITY;
         let mut scale = near;
@@ -212,6 +223,34 @@ pub struct ViewSet {
 }
 
 impl ViewSet {
+    /// Numbers the views with content densely ([`View::slot`]).
+    fn assign_slots(&mut self) {
+        let mut next = 0;
+        for v in &mut self.views {
+            if v.has_content {
+                v.slot = next;
+                next += 1;
+            } else {
+                v.slot = NO_SLOT;
+            }
+        }
+    }
+
+    /// Views with content: the number of per-view blocks the structure stores.
+    pub fn slots(&self) -> usize {
+        self.views.iter().filter(|v| v.has_content).count()
+    }
+
+    /// Marks the views for which `keep` is false as without content (no
+    /// passes, no memory) and renumbers the slots. Only sound when no
+    /// triangle reaches a tile of those views: then no hit can lie in them.
+    pub fn leave_out(&mut self, keep: &[bool]) {
+        for (v, &k) in self.views.iter_mut().zip(keep) {
+            v.has_content &= k;
+        }
+        self.assign_slots();
+    }
+
     /// The cubemap of 004 §3.2: six 90° views sharing `center`, each centre of
     /// projection moved back by the near distance so the near planes pass
     /// through `center` and the six frusta together cover all of space.
@@ -232,12 +271,14 @@ impl ViewSet {
                 a
             })
             .collect();
-        ViewSet {
+        let mut set = ViewSet {
             kind: ViewsKind::Cube,
             views,
             center,
             adjacency,
-        }
+        };
+        set.assign_slots();
+        set
     }
 
     /// One 90° view. Without `eye` it is placed on the -Z side of the bounds,
@@ -275,12 +316,14 @@ impl ViewSet {
             tiles,
             bounds,
         );
-        ViewSet {
+        let mut set = ViewSet {
             kind: ViewsKind::Single,
             views: vec![v],
             center: apex,
             adjacency: Vec::new(),
-        }
+        };
+        set.assign_slots();
+        set
     }
 }
 
