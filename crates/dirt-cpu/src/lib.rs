@@ -8,14 +8,17 @@
 //! | `fill_primitives` | [`fill_primitives`] | views, depth bounds, triangles | per (view, tile, bucket) id lists |
 //! | `trace` | [`trace`] | structure, triangles, rays | closest hits |
 //!
-//! and [`brute_force`], the ground truth the tests compare `trace` with.
+//! and [`brute_force`], the ground truth the tests compare `trace` with, and
+//! [`cache`], which rebuilds the structure only when geometry or parameters change.
 
 pub mod brute_force;
+pub mod cache;
 pub mod fill_depth;
 pub mod fill_primitives;
 pub mod mip_depth;
 pub mod trace;
 
+pub use cache::{BuildCache, Geometry, Reuse};
 pub use dirt_math::ViewsKind;
 pub use dirt_math::types::RayStats;
 pub use fill_primitives::IdLists;
