@@ -126,5 +126,18 @@ fn intersect(ray: Ray, sh: RayShear, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
     if !(err <= size * 0.000030517578125) {
         return miss;
     }
+    if is_degenerate(v0, v1, v2) {
+        return miss;
+    }
     return TriHit(true, t, u, v);
+}
+
+// dirt_math::triangle::is_degenerate: the edge vectors' cross product is exactly zero.
+fn is_degenerate(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>) -> bool {
+    let e = vec3<f32>(v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]);
+    let f = vec3<f32>(v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]);
+    let nx = edge_function(e[1], f[2], e[2], f[1]);
+    let ny = edge_function(e[2], f[0], e[0], f[2]);
+    let nz = edge_function(e[0], f[1], e[1], f[0]);
+    return nx == 0.0 && ny == 0.0 && nz == 0.0;
 }

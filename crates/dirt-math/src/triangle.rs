@@ -155,7 +155,27 @@ pub fn intersect(ray: &Ray, sh: &RayShear, tri: &Triangle) -> Option<(f32, f32, 
     if !(err <= size * (1.0 / 32768.0)) {
         return None;
     }
+    // Checked last, so it costs nothing on the many candidates that miss.
+    if is_degenerate(tri) {
+        return None;
+    }
     Some((t, u, v))
+}
+
+/// True when the triangle has zero area: the cross product of its edge vectors
+/// `v1 − v0` and `v2 − v0` (as `f32`) is exactly zero, which covers repeated
+/// vertices and collinear ones. [`intersect`] never hits such a triangle: its
+/// sheared edge functions carry rounding, so without this a ray through one of
+/// its vertices could see a tiny non-zero area and report a hit.
+#[inline]
+pub fn is_degenerate(tri: &Triangle) -> bool {
+    let [a, b, c] = tri.v;
+    let e = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let f = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let nx = edge_function(e[1], f[2], e[2], f[1]);
+    let ny = edge_function(e[2], f[0], e[0], f[2]);
+    let nz = edge_function(e[0], f[1], e[1], f[0]);
+    nx == 0.0 && ny == 0.0 && nz == 0.0
 }
 
 /// Tests `tri` (id `prim`) and keeps it in `best` if it is closer under the
@@ -234,6 +254,33 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Regression: a ray aimed exactly at a vertex of a triangle whose three
+    /// vertices lie on one line saw a non-zero sheared area from rounding and
+    /// hit it at `u = v = 0`.
+    #[test]
+    fn collinear_triangle_is_not_hit_through_its_vertex() {
+        let tri = Triangle {
+            v: [
+                [-0.04892361, 0.5, 0.25],
+                [0.4510764, 0.5, 0.25],
+                [0.20107639, 0.5, 0.25],
+            ],
+        };
+        assert!(is_degenerate(&tri));
+        let r = Ray {
+            origin: [-1.6860116, -0.17935133, -1.2122355],
+            tmin: 0.0,
+            dir: [1.637088, 0.67935133, 1.4622355],
+            tmax: f32::INFINITY,
+        };
+        assert_eq!(intersect(&r, &RayShear::new(&r), &tri), None);
+        // A real triangle of the same size is hit there.
+        let mut ok = tri;
+        ok.v[2][1] = 0.75;
+        assert!(!is_degenerate(&ok));
+        assert!(intersect(&r, &RayShear::new(&r), &ok).is_some());
     }
 
     #[test]
