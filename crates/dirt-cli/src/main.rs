@@ -13,6 +13,7 @@
 //! `dirt info` and `dirt bench` print to stdout.
 
 mod bench;
+mod eval;
 mod npy;
 mod raygen;
 
@@ -64,6 +65,9 @@ enum Command {
     /// Benchmark build and trace of every backend side by side on generated rays,
     /// with their errors against brute force (a Markdown table on stdout).
     Bench(bench::BenchArgs),
+    /// Evaluate DIRT against brute force, obvhs and Embree over scenes and a parameter
+    /// grid; write CSV, JSON, plots and a Markdown report.
+    Eval(eval::EvalArgs),
 }
 
 /// The positional scene argument shared by every subcommand.
@@ -285,6 +289,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info(&args),
         Command::Rays(args) => rays(&args),
         Command::Bench(args) => bench::bench(&args),
+        Command::Eval(args) => eval::eval(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,167 @@
+//! `dirt eval`: the evaluation harness (`dirt_eval`) from the command line.
+//!
+//! Measures DIRT (CPU, and GPU on small scenes), obvhs and Embree (with the
+//! `embree` feature) over scenes and a parameter grid against brute force,
+//! then writes CSV, JSON, SVG plots and a Markdown summary to `--out`, and
+//! the same summary to `--report` (e.g. `docs/RESULTS.md`).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use dirt_eval::EvalConfig;
+use dirt_eval::dynamic::DynamicConfig;
+
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// A tiny grid on two small scenes, no GPU: finishes in well under a minute.
+    #[arg(long)]
+    quick: bool,
+    /// Folder for results.json, builds.csv, traces.csv, dynamic.csv, the plots and summary.md.
+    #[arg(long, value_name = "DIR", default_value = "out/eval")]
+    out: PathBuf,
+    /// Also write the Markdown report here (links point into --out).
+    #[arg(long, value_name = "FILE")]
+    report: Option<PathBuf>,
+    /// Scenes, replacing the default list: a built-in name or a .gltf/.glb/.obj path,
+    /// optionally labelled as LABEL=SPEC. Repeat for several.
+    #[arg(long = "scene", value_name = "[LABEL=]SPEC")]
+    scenes: Vec<String>,
+    /// Rays per ray type (default: 4000 with --quick, else 20000).
+    #[arg(long, value_name = "N")]
+    rays: Option<usize>,
+    /// Runs per measurement; medians are reported (default: 1 with --quick, else 3).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
+    repeat: Option<u32>,
+    /// Skip the GPU backend.
+    #[arg(long)]
+    no_gpu: bool,
+    /// Skip the deforming scene.
+    #[arg(long)]
+    no_dynamic: bool,
+    /// Frames of the deforming scene.
+    #[arg(long, value_name = "N")]
+    frames: Option<usize>,
+    /// Seed of the rays.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The Stanford bunny as OBJ (made by scripts/eval); used in the full run when it exists.
+    #[arg(long, value_name = "FILE", default_value = "target/assets/bunny.obj")]
+    bunny: PathBuf,
+}
+
+pub fn eval(args: &EvalArgs) -> Result<()> {
+    let mut cfg = if args.quick {
+        EvalConfig::quick()
+    } else {
+        EvalConfig::full()
+    };
+    let mut notes = Vec::new();
+    if args.scenes.is_empty() {
+        if !args.quick {
+            let engine = dirt_eval::harness::engine_path();
+            if engine.exists() {
+                cfg.scenes
+                    .push(("2CylinderEngine".into(), engine.display().to_string()));
+            } else {
+                notes.push(format!(
+                    "2CylinderEngine skipped: {} not found (Debian package assimp-testmodels)",
+                    engine.display()
+                ));
+            }
+            if args.bunny.exists() {
+                cfg.scenes
+                    .push(("bunny".into(), args.bunny.display().to_string()));
+            } else {
+                notes.push(format!(
+                    "bunny skipped: {} not found (scripts/eval makes it from the npm package `bunny`)",
+                    args.bunny.display()
+                ));
+            }
+        }
+    } else {
+        cfg.scenes = args
+            .scenes
+            .iter()
+            .map(|s| match s.split_once('=') {
+                Some((label, spec)) if !label.is_empty() && !spec.is_empty() => {
+                    (label.to_string(), spec.to_string())
+                }
+                _ => {
+                    let label = std::path::Path::new(s)
+                        .file_stem()
+                        .map_or_else(|| s.clone(), |f| f.to_string_lossy().into_owned());
+                    (label, s.clone())
+                }
+            })
+            .collect();
+    }
+    if let Some(n) = args.rays {
+        if n == 0 {
+            bail!("--rays must be at least 1");
+        }
+        cfg.rays = n;
+        if let Some(d) = cfg.dynamic.as_mut() {
+            d.rays = n;
+        }
+    }
+    if let Some(k) = args.repeat {
+        cfg.repeat = k;
+    }
+    if args.no_gpu {
+        cfg.gpu = None;
+    }
+    if args.no_dynamic {
+        cfg.dynamic = None;
+    } else if let Some(f) = args.frames {
+        if f == 0 {
+            bail!("--frames must be at least 1");
+        }
+        let d = cfg.dynamic.get_or_insert(DynamicConfig {
+            grid: 64,
+            frames: f,
+            rays: cfg.rays,
+        });
+        d.frames = f;
+    }
+    cfg.seed = args.seed;
+    eprintln!(
+        "dirt eval: {} scene(s), {} grid point(s), {} rays per type, {} peer(s), rayon threads {}",
+        cfg.scenes.len(),
+        cfg.grid.len(),
+        cfg.rays,
+        cfg.peers.len(),
+        rayon::current_num_threads()
+    );
+    let mut res = dirt_eval::run(&cfg).context("evaluation failed")?;
+    notes.append(&mut res.notes);
+    res.notes = notes;
+    let files = dirt_eval::report::write_all(&res, &args.out, args.report.as_deref())
+        .context("cannot write the results")?;
+    let dirt_errors: usize = res
+        .traces
+        .iter()
+        .filter(|t| t.backend.starts_with("dirt") && !t.setting.starts_with("single@camera"))
+        .map(|t| t.differ)
+        .sum::<usize>()
+        + res
+            .dynamic
+            .iter()
+            .filter(|r| r.backend == "dirt-cpu")
+            .map(|r| r.differ)
+            .sum::<usize>();
+    for f in &files {
+        eprintln!("wrote {}", f.display());
+    }
+    for n in &res.notes {
+        eprintln!("note: {n}");
+    }
+    eprintln!(
+        "dirt eval: {:.0} s; DIRT rays differing from brute force (exact settings): {dirt_errors}",
+        res.wall_s
+    );
+    if dirt_errors > 0 {
+        bail!("DIRT differs from brute force on {dirt_errors} ray(s): a defect (see the report)");
+    }
+    Ok(())
+}

@@ -1,0 +1,785 @@
+//! The evaluation run: scenes × parameter grid × ray types × traversals, the
+//! peers and the GPU backend beside DIRT on the CPU, all against brute force.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind};
+use dirt_math::{Hit, Ray, RayStats, Triangle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::Serialize;
+
+use crate::dynamic::{DynamicConfig, DynamicRow};
+use crate::peers::PeerKind;
+use crate::rays::{self, RayType};
+use crate::{Disagreement, EvalError, Match, compare};
+
+/// One point of the parameter grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridPoint {
+    pub params: AdsParams,
+    /// Place the single view at the scene camera's eye (the paper's
+    /// camera-centred setting; not exact: hits outside its frustum are lost).
+    pub at_camera: bool,
+}
+
+impl GridPoint {
+    pub fn new(views: ViewsKind, resolution: u32, buckets: u32, tile: u32) -> GridPoint {
+        GridPoint {
+            params: AdsParams {
+                views,
+                resolution,
+                buckets,
+                tile,
+                center: None,
+            },
+            at_camera: false,
+        }
+    }
+
+    /// A short name, e.g. `cube r128 B8 S1`.
+    pub fn label(&self) -> String {
+        let p = &self.params;
+        let views = match (p.views, self.at_camera) {
+            (ViewsKind::Cube, _) => "cube",
+            (ViewsKind::Single, false) => "single",
+            (ViewsKind::Single, true) => "single@camera",
+        };
+        format!("{views} r{} B{} S{}", p.resolution, p.buckets, p.tile)
+    }
+}
+
+/// Which scenes the GPU backend (lavapipe here) runs on, and how many rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpuConfig {
+    /// Scenes with more triangles are skipped.
+    pub max_triangles: usize,
+    /// Rays per ray type.
+    pub rays: usize,
+}
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct EvalConfig {
+    /// `(label, spec)`: a built-in name or a glTF/OBJ path.
+    pub scenes: Vec<(String, String)>,
+    pub grid: Vec<GridPoint>,
+    pub traversals: Vec<Traversal>,
+    /// Rays per ray type.
+    pub rays: usize,
+    /// Brute-force budget per ray type in ray/triangle tests: the first
+    /// `budget / triangles` rays (at least 200) are compared with brute force.
+    pub truth_tests: u64,
+    /// Builds and traces per measurement; medians are reported.
+    pub repeat: u32,
+    pub gpu: Option<GpuConfig>,
+    pub peers: Vec<PeerKind>,
+    pub dynamic: Option<DynamicConfig>,
+    pub seed: u64,
+    /// Whether a progress bar may be drawn (only ever on a terminal).
+    pub progress: bool,
+    /// Describes the grid in the report.
+    pub grid_name: String,
+}
+
+/// The default parameters (`AdsParams::default()`): cube, 128, B 8, S 1.
+pub fn default_point() -> GridPoint {
+    GridPoint {
+        params: AdsParams::default(),
+        at_camera: false,
+    }
+}
+
+impl EvalConfig {
+    /// A tiny grid for CI and a first look: the default setting, B 1 and 32,
+    /// S 2, a single view; no GPU; a small deforming scene.
+    pub fn quick() -> EvalConfig {
+        let d = default_point();
+        let mut grid = vec![d];
+        for b in [1, 32] {
+            grid.push(GridPoint::new(ViewsKind::Cube, 128, b, 1));
+        }
+        grid.push(GridPoint::new(ViewsKind::Cube, 128, 8, 2));
+        grid.push(GridPoint::new(ViewsKind::Single, 128, 8, 1));
+        EvalConfig {
+            scenes: vec![
+                ("cornell".into(), "cornell".into()),
+                ("foliage".into(), "foliage".into()),
+            ],
+            grid,
+            traversals: vec![Traversal::Linear, Traversal::HiZ],
+            rays: 4000,
+            truth_tests: 20_000_000,
+            repeat: 1,
+            gpu: None,
+            peers: PeerKind::available(),
+            dynamic: Some(DynamicConfig {
+                grid: 32,
+                frames: 3,
+                rays: 4000,
+            }),
+            seed: 1,
+            progress: true,
+            grid_name: "quick: cube r128 with B {1, 8, 32} and S {1, 2}, single r128 B8 S1".into(),
+        }
+    }
+
+    /// The grid of the committed results: around the default (cube, r128,
+    /// B 8, S 1) the full B × S cross at r128, resolutions 64 and 256, a
+    /// single view outside the scene and one at the camera; GPU on scenes of
+    /// at most 5 000 triangles.
+    pub fn full() -> EvalConfig {
+        let mut grid = Vec::new();
+        for s in [1, 2, 4] {
+            for b in [1, 4, 8, 16, 32] {
+                grid.push(GridPoint::new(ViewsKind::Cube, 128, b, s));
+            }
+        }
+        for r in [64, 256] {
+            grid.push(GridPoint::new(ViewsKind::Cube, r, 8, 1));
+        }
+        grid.push(GridPoint::new(ViewsKind::Single, 128, 8, 1));
+        let mut at_camera = GridPoint::new(ViewsKind::Single, 128, 8, 1);
+        at_camera.at_camera = true;
+        grid.push(at_camera);
+        EvalConfig {
+            scenes: ["cornell", "layers", "foliage", "spheres"]
+                .iter()
+                .map(|s| (s.to_string(), s.to_string()))
+                .collect(),
+            grid,
+            traversals: vec![Traversal::Linear, Traversal::HiZ],
+            rays: 20_000,
+            truth_tests: 400_000_000,
+            repeat: 3,
+            gpu: Some(GpuConfig {
+                max_triangles: 5_000,
+                rays: 2_000,
+            }),
+            peers: PeerKind::available(),
+            dynamic: Some(DynamicConfig {
+                grid: 128,
+                frames: 8,
+                rays: 20_000,
+            }),
+            seed: 1,
+            progress: true,
+            grid_name: "full: cube r128 with B {1, 4, 8, 16, 32} x S {1, 2, 4}; cube r64 and r256 (B8 S1); single r128 B8 S1 outside the scene and at the camera".into(),
+        }
+    }
+}
+
+/// The machine the run was measured on.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Machine {
+    pub cpu: String,
+    pub cores: usize,
+    /// Threads of rayon's pool: DIRT's CPU stages, brute force, peers' traces.
+    pub rayon_threads: usize,
+    /// The GPU adapter, when the GPU backend ran.
+    pub gpu: Option<String>,
+    pub os: String,
+    /// UTC time of the run.
+    pub date: String,
+    /// Whether this binary was built with optimisations.
+    pub release: bool,
+}
+
+impl Machine {
+    pub fn detect() -> Machine {
+        let cpu = std::fs::read_to_string("/proc/cpuinfo")
+            .ok()
+            .and_then(|s| {
+                s.lines()
+                    .find(|l| l.starts_with("model name"))
+                    .and_then(|l| l.split(':').nth(1))
+                    .map(|m| m.trim().to_string())
+            })
+            .unwrap_or_else(|| "unknown".into());
+        let os = std::fs::read_to_string("/etc/os-release")
+            .ok()
+            .and_then(|s| {
+                s.lines().find(|l| l.starts_with("PRETTY_NAME=")).map(|l| {
+                    l.trim_start_matches("PRETTY_NAME=")
+                        .trim_matches('"')
+                        .to_string()
+                })
+            })
+            .unwrap_or_else(|| std::env::consts::OS.to_string());
+        Machine {
+            cpu,
+            cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            rayon_threads: rayon::current_num_threads(),
+            gpu: None,
+            os,
+            date: utc_now(),
+            release: !cfg!(debug_assertions),
+        }
+    }
+}
+
+/// `YYYY-MM-DD HH:MM UTC` from the system clock.
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02} UTC",
+        rem / 3600,
+        (rem % 3600) / 60
+    )
+}
+
+/// One structure build.
+#[derive(Clone, Debug, Serialize)]
+pub struct BuildRow {
+    pub scene: String,
+    pub triangles: usize,
+    /// `dirt-cpu`, `dirt-gpu`, `obvhs`, `embree`.
+    pub backend: String,
+    /// Grid label (empty for peers).
+    pub setting: String,
+    pub views: String,
+    pub resolution: Option<u32>,
+    pub buckets: Option<u32>,
+    pub tile: Option<u32>,
+    pub fill_depth_ms: Option<f64>,
+    pub mip_depth_ms: Option<f64>,
+    pub fill_primitives_ms: Option<f64>,
+    /// Median wall time of the whole build call.
+    pub build_ms: f64,
+    pub nodes: Option<u64>,
+    pub depth_hiz_bytes: Option<u64>,
+    pub depth_hiz_model_bytes: Option<f64>,
+    pub id_buffer_bytes: Option<u64>,
+    pub id_buffer_model_bytes: Option<f64>,
+    pub total_bytes: Option<u64>,
+}
+
+/// One trace: a backend, a setting, a traversal and a ray type.
+#[derive(Clone, Debug, Serialize)]
+pub struct TraceRow {
+    pub scene: String,
+    pub triangles: usize,
+    pub backend: String,
+    pub setting: String,
+    pub traversal: String,
+    pub ray_type: String,
+    pub rays: usize,
+    /// Median wall time of tracing all `rays`.
+    pub trace_ms: f64,
+    pub mrays_per_s: f64,
+    /// Per ray, over the compared rays (DIRT only).
+    pub tiles_per_ray: Option<f64>,
+    pub buckets_per_ray: Option<f64>,
+    pub tests_per_ray: Option<f64>,
+    /// Rays of the first `compared` compared with brute force.
+    pub compared: usize,
+    pub differ: usize,
+    pub differ_prim: usize,
+    /// GPU: rays the CPU reference finished (work budget spent).
+    pub cpu_finished: Option<usize>,
+}
+
+/// Everything one run measured.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EvalResults {
+    pub machine: Machine,
+    pub grid: String,
+    pub rays_per_type: usize,
+    pub repeat: u32,
+    pub scenes: Vec<SceneInfo>,
+    pub builds: Vec<BuildRow>,
+    pub traces: Vec<TraceRow>,
+    pub dynamic: Vec<DynamicRow>,
+    /// What was skipped, and why.
+    pub notes: Vec<String>,
+    /// Wall time of the whole run, seconds.
+    pub wall_s: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneInfo {
+    pub name: String,
+    pub spec: String,
+    pub triangles: usize,
+    /// Rays per type compared with brute force.
+    pub compared: usize,
+}
+
+pub(crate) fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        0.5 * (v[m - 1] + v[m])
+    }
+}
+
+/// Runs `f` `k` times; the median wall time in ms and the last result.
+pub(crate) fn timed<T, E>(k: u32, mut f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
+    let mut times = Vec::new();
+    let mut last;
+    loop {
+        let start = Instant::now();
+        last = f()?;
+        times.push(ms(start.elapsed()));
+        if times.len() >= k.max(1) as usize {
+            break;
+        }
+    }
+    Ok((median(times), last))
+}
+
+pub(crate) fn traversal_name(t: Traversal) -> &'static str {
+    match t {
+        Traversal::Linear => "linear",
+        Traversal::HiZ => "hiz",
+    }
+}
+
+fn per_ray(stats: &[RayStats]) -> (f64, f64, f64) {
+    let n = stats.len().max(1) as f64;
+    let sum = |f: fn(&RayStats) -> u32| stats.iter().map(|s| u64::from(f(s))).sum::<u64>() as f64;
+    (
+        sum(|s| s.tiles) / n,
+        sum(|s| s.buckets) / n,
+        sum(|s| s.tests) / n,
+    )
+}
+
+pub(crate) fn mrays(rays: usize, ms: f64) -> f64 {
+    if ms > 0.0 {
+        rays as f64 / ms / 1e3
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The progress bar: drawn only on a terminal (indicatif hides itself otherwise).
+fn progress_bar(len: u64, enabled: bool) -> ProgressBar {
+    if !enabled {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+    {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb
+}
+
+/// The ground truth and the rays of one scene.
+struct Prepared {
+    name: String,
+    tris: Vec<Triangle>,
+    rays: Vec<(RayType, Vec<Ray>)>,
+    truth: Vec<Vec<Hit>>,
+    camera_eye: Option<dirt_math::Vec3>,
+}
+
+/// Runs the whole evaluation.
+pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
+    if cfg.rays == 0 {
+        return Err(EvalError::Config("rays per type must be at least 1".into()));
+    }
+    if cfg.grid.is_empty() || cfg.traversals.is_empty() {
+        return Err(EvalError::Config(
+            "the grid and the traversals must not be empty".into(),
+        ));
+    }
+    let start = Instant::now();
+    let mut res = EvalResults {
+        machine: Machine::detect(),
+        grid: cfg.grid_name.clone(),
+        rays_per_type: cfg.rays,
+        repeat: cfg.repeat,
+        ..EvalResults::default()
+    };
+    let threads = rayon::current_num_threads();
+    let gpu = match cfg.gpu {
+        Some(_) => match dirt_gpu::Gpu::new() {
+            Ok(g) => {
+                res.machine.gpu = Some(g.describe());
+                Some(g)
+            }
+            Err(e) => {
+                res.notes.push(format!("GPU backend skipped: {e}"));
+                None
+            }
+        },
+        None => {
+            res.notes
+                .push("GPU backend not run (not requested in this grid)".into());
+            None
+        }
+    };
+    let per_scene = cfg.grid.len() + cfg.peers.len() + usize::from(gpu.is_some()) + 1;
+    let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames);
+    let pb = progress_bar(
+        (cfg.scenes.len() * per_scene + dyn_steps) as u64,
+        cfg.progress,
+    );
+
+    for (label, spec) in &cfg.scenes {
+        pb.set_message(format!("{label}: rays and ground truth"));
+        let scene = match dirt_scene::open(spec) {
+            Ok(s) => s,
+            Err(source) => {
+                return Err(EvalError::Scene {
+                    spec: spec.clone(),
+                    source,
+                });
+            }
+        };
+        let prep = prepare(label, &scene, cfg)?;
+        pb.inc(1);
+        res.scenes.push(SceneInfo {
+            name: prep.name.clone(),
+            spec: spec.clone(),
+            triangles: prep.tris.len(),
+            compared: prep.truth.first().map_or(0, Vec::len),
+        });
+        // Brute force itself, for scale.
+        for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
+            let n = truth.len();
+            let (t_ms, _) = timed::<_, EvalError>(1, || {
+                Ok(dirt_cpu::brute_force::trace(&prep.tris, &rays[..n]))
+            })?;
+            res.traces.push(TraceRow {
+                scene: prep.name.clone(),
+                triangles: prep.tris.len(),
+                backend: "brute".into(),
+                setting: String::new(),
+                traversal: String::new(),
+                ray_type: ty.to_string(),
+                rays: n,
+                trace_ms: t_ms,
+                mrays_per_s: mrays(n, t_ms),
+                tiles_per_ray: None,
+                buckets_per_ray: None,
+                tests_per_ray: Some(prep.tris.len() as f64),
+                compared: n,
+                differ: 0,
+                differ_prim: 0,
+                cpu_finished: None,
+            });
+        }
+        for point in &cfg.grid {
+            pb.set_message(format!("{label}: dirt-cpu {}", point.label()));
+            let mut point = *point;
+            if point.at_camera {
+                match prep.camera_eye {
+                    Some(eye) => point.params.center = Some(eye),
+                    None => {
+                        res.notes.push(format!(
+                            "{}: {} skipped (the scene has no camera)",
+                            prep.name,
+                            point.label()
+                        ));
+                        pb.inc(1);
+                        continue;
+                    }
+                }
+            }
+            measure_cpu(&prep, &point, cfg, &mut res)?;
+            pb.inc(1);
+        }
+        for peer in &cfg.peers {
+            pb.set_message(format!("{label}: {}", peer.name()));
+            match measure_peer(&prep, *peer, threads, cfg, &mut res) {
+                Ok(()) => {}
+                Err(EvalError::PeerUnavailable(m)) => res.notes.push(m),
+                Err(e) => return Err(e),
+            }
+            pb.inc(1);
+        }
+        if let (Some(g), Some(gc)) = (&gpu, cfg.gpu) {
+            pb.set_message(format!("{label}: dirt-gpu"));
+            if prep.tris.len() <= gc.max_triangles {
+                measure_gpu(g, &prep, gc, cfg, &mut res)?;
+            } else {
+                res.notes.push(format!(
+                    "{}: GPU backend skipped ({} triangles > {}: lavapipe is slow)",
+                    prep.name,
+                    prep.tris.len(),
+                    gc.max_triangles
+                ));
+            }
+            pb.inc(1);
+        }
+    }
+    if let Some(dc) = cfg.dynamic {
+        pb.set_message("dynamic scene");
+        res.dynamic = crate::dynamic::run(&dc, &cfg.peers, threads, cfg.seed, &pb, &mut res.notes)?;
+    }
+    pb.finish_and_clear();
+    res.wall_s = start.elapsed().as_secs_f64();
+    Ok(res)
+}
+
+fn prepare(
+    label: &str,
+    scene: &dirt_scene::Scene,
+    cfg: &EvalConfig,
+) -> Result<Prepared, EvalError> {
+    let tris = scene.triangles.clone();
+    if tris.is_empty() {
+        return Err(EvalError::Rays(format!("scene {label} has no triangles")));
+    }
+    // Primary hits come from DIRT with the default (exact) setting: the same
+    // hits as brute force, much faster on large scenes.
+    let reference =
+        Ads::build(&tris, &AdsParams::default()).map_err(|source| EvalError::Build {
+            scene: label.to_string(),
+            source,
+        })?;
+    let rays = rays::table1(scene, cfg.rays, cfg.seed, |r| {
+        dirt_cpu::trace(&reference, &tris, r, Traversal::Linear)
+    })?;
+    let compared = ((cfg.truth_tests / tris.len() as u64) as usize)
+        .max(200)
+        .min(cfg.rays);
+    let truth = rays
+        .iter()
+        .map(|(_, r)| dirt_cpu::brute_force::trace(&tris, &r[..compared]))
+        .collect();
+    Ok(Prepared {
+        name: label.to_string(),
+        camera_eye: rays::Camera::of_scene(scene).map(|c| c.eye),
+        tris,
+        rays,
+        truth,
+    })
+}
+
+fn measure_cpu(
+    prep: &Prepared,
+    point: &GridPoint,
+    cfg: &EvalConfig,
+    res: &mut EvalResults,
+) -> Result<(), EvalError> {
+    let mut stages = (Vec::new(), Vec::new(), Vec::new());
+    let (build_ms, ads) = timed(cfg.repeat, || {
+        let a = Ads::build(&prep.tris, &point.params)?;
+        stages.0.push(ms(a.timings.fill_depth));
+        stages.1.push(ms(a.timings.mip_depth));
+        stages.2.push(ms(a.timings.fill_primitives));
+        Ok::<_, dirt_cpu::CpuError>(a)
+    })
+    .map_err(|source| EvalError::Build {
+        scene: prep.name.clone(),
+        source,
+    })?;
+    let mem = ads.memory();
+    let entry = |name: &str| mem.entries.iter().find(|e| e.name == name);
+    let setting = point.label();
+    res.builds.push(BuildRow {
+        scene: prep.name.clone(),
+        triangles: prep.tris.len(),
+        backend: "dirt-cpu".into(),
+        setting: setting.clone(),
+        views: match (point.params.views, point.at_camera) {
+            (ViewsKind::Cube, _) => "cube".into(),
+            (ViewsKind::Single, false) => "single".into(),
+            (ViewsKind::Single, true) => "single@camera".into(),
+        },
+        resolution: Some(point.params.resolution),
+        buckets: Some(point.params.buckets),
+        tile: Some(point.params.tile),
+        fill_depth_ms: Some(median(stages.0)),
+        mip_depth_ms: Some(median(stages.1)),
+        fill_primitives_ms: Some(median(stages.2)),
+        build_ms,
+        nodes: Some(ads.lists.ids.len() as u64),
+        depth_hiz_bytes: entry("depth + hi-z").map(|e| e.bytes),
+        depth_hiz_model_bytes: entry("depth + hi-z").and_then(|e| e.model),
+        id_buffer_bytes: entry("id buffer").map(|e| e.bytes),
+        id_buffer_model_bytes: entry("id buffer").and_then(|e| e.model),
+        total_bytes: Some(mem.total()),
+    });
+    for &trav in &cfg.traversals {
+        for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
+            let (t_ms, hits) = timed::<_, EvalError>(cfg.repeat, || {
+                Ok(dirt_cpu::trace(&ads, &prep.tris, rays, trav))
+            })?;
+            let (_, stats) =
+                dirt_cpu::trace_with_stats(&ads, &prep.tris, &rays[..truth.len()], trav);
+            let (tiles, buckets, tests) = per_ray(&stats);
+            let d = compare(&hits, truth, Match::Bits);
+            res.traces.push(TraceRow {
+                scene: prep.name.clone(),
+                triangles: prep.tris.len(),
+                backend: "dirt-cpu".into(),
+                setting: setting.clone(),
+                traversal: traversal_name(trav).into(),
+                ray_type: ty.to_string(),
+                rays: rays.len(),
+                trace_ms: t_ms,
+                mrays_per_s: mrays(rays.len(), t_ms),
+                tiles_per_ray: Some(tiles),
+                buckets_per_ray: Some(buckets),
+                tests_per_ray: Some(tests),
+                compared: d.compared,
+                differ: d.differ,
+                differ_prim: d.differ_prim,
+                cpu_finished: None,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn measure_peer(
+    prep: &Prepared,
+    peer: PeerKind,
+    threads: usize,
+    cfg: &EvalConfig,
+    res: &mut EvalResults,
+) -> Result<(), EvalError> {
+    let mut times = Vec::new();
+    let mut built = None;
+    for _ in 0..cfg.repeat.max(1) {
+        let (p, t) = peer.build(&prep.tris, threads)?;
+        times.push(ms(t));
+        built = Some(p);
+    }
+    let Some(p) = built else {
+        return Ok(());
+    };
+    res.builds.push(BuildRow {
+        scene: prep.name.clone(),
+        triangles: prep.tris.len(),
+        backend: peer.name().into(),
+        setting: String::new(),
+        views: String::new(),
+        resolution: None,
+        buckets: None,
+        tile: None,
+        fill_depth_ms: None,
+        mip_depth_ms: None,
+        fill_primitives_ms: None,
+        build_ms: median(times),
+        nodes: None,
+        depth_hiz_bytes: None,
+        depth_hiz_model_bytes: None,
+        id_buffer_bytes: None,
+        id_buffer_model_bytes: None,
+        total_bytes: p.memory(),
+    });
+    for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
+        let (t_ms, hits) = timed::<_, EvalError>(cfg.repeat, || Ok(p.trace(rays)))?;
+        let d: Disagreement = compare(&hits, truth, Match::PEER);
+        res.traces.push(TraceRow {
+            scene: prep.name.clone(),
+            triangles: prep.tris.len(),
+            backend: peer.name().into(),
+            setting: String::new(),
+            traversal: String::new(),
+            ray_type: ty.to_string(),
+            rays: rays.len(),
+            trace_ms: t_ms,
+            mrays_per_s: mrays(rays.len(), t_ms),
+            tiles_per_ray: None,
+            buckets_per_ray: None,
+            tests_per_ray: None,
+            compared: d.compared,
+            differ: d.differ,
+            differ_prim: d.differ_prim,
+            cpu_finished: None,
+        });
+    }
+    Ok(())
+}
+
+fn measure_gpu(
+    gpu: &dirt_gpu::Gpu,
+    prep: &Prepared,
+    gc: GpuConfig,
+    cfg: &EvalConfig,
+    res: &mut EvalResults,
+) -> Result<(), EvalError> {
+    let point = default_point();
+    let mut stages = (Vec::new(), Vec::new(), Vec::new());
+    let (build_ms, ads) = timed(cfg.repeat.min(2), || {
+        let a = dirt_gpu::GpuAds::build(gpu, &prep.tris, &point.params)?;
+        stages.0.push(ms(a.timings.fill_depth));
+        stages.1.push(ms(a.timings.mip_depth));
+        stages.2.push(ms(a.timings.fill_primitives));
+        Ok::<_, EvalError>(a)
+    })?;
+    res.builds.push(BuildRow {
+        scene: prep.name.clone(),
+        triangles: prep.tris.len(),
+        backend: "dirt-gpu".into(),
+        setting: point.label(),
+        views: "cube".into(),
+        resolution: Some(point.params.resolution),
+        buckets: Some(point.params.buckets),
+        tile: Some(point.params.tile),
+        fill_depth_ms: Some(median(stages.0)),
+        mip_depth_ms: Some(median(stages.1)),
+        fill_primitives_ms: Some(median(stages.2)),
+        build_ms,
+        nodes: Some(u64::from(ads.nodes)),
+        depth_hiz_bytes: None,
+        depth_hiz_model_bytes: None,
+        id_buffer_bytes: None,
+        id_buffer_model_bytes: None,
+        total_bytes: None,
+    });
+    for &trav in &cfg.traversals {
+        for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
+            let n = gc.rays.min(rays.len());
+            let (t_ms, traced) = timed(1, || {
+                dirt_gpu::trace::trace_report(gpu, &ads, &rays[..n], trav)
+            })?;
+            let (tiles, buckets, tests) = per_ray(&traced.stats);
+            let d = compare(&traced.hits, truth, Match::Bits);
+            res.traces.push(TraceRow {
+                scene: prep.name.clone(),
+                triangles: prep.tris.len(),
+                backend: "dirt-gpu".into(),
+                setting: point.label(),
+                traversal: traversal_name(trav).into(),
+                ray_type: ty.to_string(),
+                rays: n,
+                trace_ms: t_ms,
+                mrays_per_s: mrays(n, t_ms),
+                tiles_per_ray: Some(tiles),
+                buckets_per_ray: Some(buckets),
+                tests_per_ray: Some(tests),
+                compared: d.compared,
+                differ: d.differ,
+                differ_prim: d.differ_prim,
+                cpu_finished: Some(traced.cpu_finished),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Where the scene list's real assets live.
+pub fn engine_path() -> PathBuf {
+    PathBuf::from("/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb")
+}

@@ -1,0 +1,342 @@
+//! SVG plots of a run with `plotters`: a Pareto plot per scene (error against
+//! time over the grid, peers beside), build and trace time against B and S,
+//! and the per-frame cost of the deforming scene.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use crate::EvalError;
+use crate::harness::{EvalResults, TraceRow};
+
+/// A written plot: its title and file name (inside the output folder).
+#[derive(Clone, Debug)]
+pub struct Plot {
+    pub title: String,
+    pub file: String,
+    /// The scene it belongs to, if one.
+    pub scene: Option<String>,
+}
+
+const COLORS: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+fn plot_err(path: &Path, e: impl std::fmt::Display) -> EvalError {
+    EvalError::Output {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+/// One point of a Pareto plot.
+#[derive(Clone, Debug)]
+pub struct ParetoPoint {
+    pub series: String,
+    pub label: String,
+    /// Build + trace of every ray type, ms.
+    pub time_ms: f64,
+    /// Rays differing from brute force, in % of the compared rays.
+    pub error_pct: f64,
+}
+
+/// The points of one scene: every (setting, traversal) of DIRT on the CPU and
+/// every peer, each with its build plus the trace of all ray types.
+pub fn pareto_points(res: &EvalResults, scene: &str) -> Vec<ParetoPoint> {
+    let mut groups: BTreeMap<(String, String, String), Vec<&TraceRow>> = BTreeMap::new();
+    for t in res.traces.iter().filter(|t| t.scene == scene) {
+        if t.backend == "brute" || t.backend == "dirt-gpu" {
+            continue;
+        }
+        groups
+            .entry((t.backend.clone(), t.setting.clone(), t.traversal.clone()))
+            .or_default()
+            .push(t);
+    }
+    groups
+        .into_iter()
+        .filter_map(|((backend, setting, traversal), rows)| {
+            let build = res
+                .builds
+                .iter()
+                .find(|b| b.scene == scene && b.backend == backend && b.setting == setting)?
+                .build_ms;
+            let trace: f64 = rows.iter().map(|r| r.trace_ms).sum();
+            let compared: usize = rows.iter().map(|r| r.compared).sum();
+            let differ: usize = rows.iter().map(|r| r.differ).sum();
+            let series = if backend == "dirt-cpu" {
+                format!("dirt-cpu {traversal}")
+            } else {
+                backend.clone()
+            };
+            Some(ParetoPoint {
+                series,
+                label: setting,
+                time_ms: build + trace,
+                error_pct: 100.0 * differ as f64 / compared.max(1) as f64,
+            })
+        })
+        .collect()
+}
+
+/// Writes every plot into `dir`.
+pub fn write_all(res: &EvalResults, dir: &Path) -> Result<Vec<Plot>, EvalError> {
+    let mut plots = Vec::new();
+    for s in &res.scenes {
+        let file = format!("pareto_{}.svg", s.name);
+        let title = format!("{}: error vs build + trace time", s.name);
+        pareto(&pareto_points(res, &s.name), &title, &dir.join(&file))?;
+        plots.push(Plot {
+            title,
+            file,
+            scene: Some(s.name.clone()),
+        });
+    }
+    for (knob, file) in [("B", "sweep_buckets.svg"), ("S", "sweep_tile.svg")] {
+        if sweep(res, knob, &dir.join(file))? {
+            plots.push(Plot {
+                title: format!("build and trace time against {knob} (cube, r128)"),
+                file: file.into(),
+                scene: None,
+            });
+        }
+    }
+    if !res.dynamic.is_empty() {
+        let file = "dynamic.svg";
+        dynamic(res, &dir.join(file))?;
+        plots.push(Plot {
+            title: "deforming scene: rebuild + trace per frame".into(),
+            file: file.into(),
+            scene: None,
+        });
+    }
+    Ok(plots)
+}
+
+fn pareto(points: &[ParetoPoint], title: &str, path: &Path) -> Result<(), EvalError> {
+    let root = SVGBackend::new(path, (720, 480)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let xmax = points.iter().map(|p| p.time_ms).fold(1e-3, f64::max) * 1.3;
+    let xmin = points.iter().map(|p| p.time_ms).fold(xmax, f64::min) / 1.3;
+    let ymax = points.iter().map(|p| p.error_pct).fold(0.0, f64::max);
+    let ymax = if ymax > 0.0 { ymax * 1.15 } else { 1.0 };
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d((xmin..xmax).log_scale(), -0.02 * ymax..ymax)
+        .map_err(|e| plot_err(path, e))?;
+    chart
+        .configure_mesh()
+        .x_desc("build + trace of all ray types, ms (log)")
+        .y_desc("rays differing from brute force, %")
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    let mut series: Vec<&str> = points.iter().map(|p| p.series.as_str()).collect();
+    series.dedup();
+    series.sort_unstable();
+    series.dedup();
+    for (i, s) in series.iter().enumerate() {
+        let c = COLORS[i % COLORS.len()];
+        chart
+            .draw_series(
+                points
+                    .iter()
+                    .filter(|p| p.series == *s)
+                    .map(|p| Circle::new((p.time_ms, p.error_pct), 4, c.filled())),
+            )
+            .map_err(|e| plot_err(path, e))?
+            .label(*s)
+            .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
+    }
+    // The frontier: no other point is both faster and no worse.
+    let mut sorted: Vec<&ParetoPoint> = points.iter().collect();
+    sorted.sort_by(|a, b| a.time_ms.total_cmp(&b.time_ms));
+    let mut frontier = Vec::new();
+    let mut best = f64::INFINITY;
+    for p in sorted {
+        if p.error_pct < best {
+            best = p.error_pct;
+            frontier.push((p.time_ms, p.error_pct));
+        }
+    }
+    chart
+        .draw_series(LineSeries::new(frontier, BLACK.stroke_width(1)))
+        .map_err(|e| plot_err(path, e))?
+        .label("Pareto frontier")
+        .legend(|(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], BLACK));
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.8))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(())
+}
+
+/// Build and trace (all ray types, linear) against B (S 1) or S (B 8), cube
+/// r128, one line per scene. Returns false when the grid has no such sweep.
+fn sweep(res: &EvalResults, knob: &str, path: &Path) -> Result<bool, EvalError> {
+    // (scene, x) -> (build ms, trace ms)
+    let mut lines: BTreeMap<String, Vec<(f64, f64, f64)>> = BTreeMap::new();
+    for b in res
+        .builds
+        .iter()
+        .filter(|b| b.backend == "dirt-cpu" && b.views == "cube" && b.resolution == Some(128))
+    {
+        let (Some(buckets), Some(tile)) = (b.buckets, b.tile) else {
+            continue;
+        };
+        let x = match knob {
+            "B" if tile == 1 => buckets,
+            "S" if buckets == 8 => tile,
+            _ => continue,
+        };
+        let trace: f64 = res
+            .traces
+            .iter()
+            .filter(|t| {
+                t.scene == b.scene
+                    && t.backend == "dirt-cpu"
+                    && t.setting == b.setting
+                    && t.traversal == "linear"
+            })
+            .map(|t| t.trace_ms)
+            .sum();
+        lines
+            .entry(b.scene.clone())
+            .or_default()
+            .push((f64::from(x), b.build_ms, trace));
+    }
+    lines.retain(|_, v| v.len() >= 2);
+    if lines.is_empty() {
+        return Ok(false);
+    }
+    for v in lines.values_mut() {
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let root = SVGBackend::new(path, (960, 420)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let (left, right) = root.split_horizontally(480);
+    let xmax = lines.values().flatten().map(|p| p.0).fold(1.0, f64::max);
+    for (area, which, name) in [
+        (left, 1usize, "build"),
+        (right, 2usize, "trace, all ray types (linear)"),
+    ] {
+        let val = |p: &(f64, f64, f64)| if which == 1 { p.1 } else { p.2 };
+        let ymax = lines.values().flatten().map(val).fold(1e-3, f64::max) * 1.5;
+        let ymin = lines
+            .values()
+            .flatten()
+            .map(val)
+            .fold(ymax, f64::min)
+            .max(1e-3)
+            / 1.5;
+        let mut chart = ChartBuilder::on(&area)
+            .caption(format!("{name} vs {knob}"), ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(55)
+            .build_cartesian_2d((1.0..xmax * 1.1).log_scale(), (ymin..ymax).log_scale())
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("{knob} (log)"))
+            .y_desc("ms (log)")
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        for (i, (scene, pts)) in lines.iter().enumerate() {
+            let c = COLORS[i % COLORS.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|p| (p.0, val(p))),
+                    c.stroke_width(2),
+                ))
+                .map_err(|e| plot_err(path, e))?
+                .label(scene.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], c));
+            chart
+                .draw_series(
+                    pts.iter()
+                        .map(|p| Circle::new((p.0, val(p)), 3, c.filled())),
+                )
+                .map_err(|e| plot_err(path, e))?;
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+    }
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(true)
+}
+
+fn dynamic(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
+    let root = SVGBackend::new(path, (720, 420)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let mut backends: Vec<&str> = res.dynamic.iter().map(|r| r.backend.as_str()).collect();
+    backends.sort_unstable();
+    backends.dedup();
+    let frames = res.dynamic.iter().map(|r| r.frame).max().unwrap_or(0) as f64;
+    let ymax = res.dynamic.iter().map(|r| r.frame_ms).fold(1e-3, f64::max) * 1.5;
+    let ymin = res
+        .dynamic
+        .iter()
+        .map(|r| r.frame_ms)
+        .fold(ymax, f64::min)
+        .max(1e-3)
+        / 1.5;
+    let tris = res.dynamic.first().map_or(0, |r| r.triangles);
+    let rays = res.dynamic.first().map_or(0, |r| r.rays);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("deforming grid, {tris} triangles, {rays} rays: rebuild + trace per frame"),
+            ("sans-serif", 16),
+        )
+        .margin(12)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(-0.2..frames + 0.2, (ymin..ymax).log_scale())
+        .map_err(|e| plot_err(path, e))?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .y_desc("ms per frame (log)")
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    for (i, b) in backends.iter().enumerate() {
+        let c = COLORS[i % COLORS.len()];
+        let pts: Vec<(f64, f64)> = res
+            .dynamic
+            .iter()
+            .filter(|r| r.backend == *b)
+            .map(|r| (r.frame as f64, r.frame_ms))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+            .map_err(|e| plot_err(path, e))?
+            .label(*b)
+            .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], c));
+    }
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.8))
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(())
+}

@@ -1,0 +1,572 @@
+//! Writes a run: `results.json` (everything), `builds.csv`, `traces.csv`,
+//! `dynamic.csv`, the SVG plots, and a Markdown summary (`summary.md`, and
+//! the same text at another path such as `docs/RESULTS.md`).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::EvalError;
+use crate::dynamic::medians;
+use crate::harness::{BuildRow, EvalResults, TraceRow, mrays};
+use crate::plot::{self, Plot};
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> EvalError + '_ {
+    move |source| EvalError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+fn out_err(path: &Path, e: impl std::fmt::Display) -> EvalError {
+    EvalError::Output {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+fn write_csv<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<(), EvalError> {
+    let mut w = csv::Writer::from_path(path).map_err(|e| out_err(path, e))?;
+    for r in rows {
+        w.serialize(r).map_err(|e| out_err(path, e))?;
+    }
+    w.flush().map_err(io(path))
+}
+
+/// Writes every output into `dir` and, if given, the Markdown report to
+/// `report` (its links point into `dir`). Returns the files written.
+pub fn write_all(
+    res: &EvalResults,
+    dir: &Path,
+    report: Option<&Path>,
+) -> Result<Vec<PathBuf>, EvalError> {
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let mut files = Vec::new();
+    let json = dir.join("results.json");
+    let text = serde_json::to_string_pretty(res).map_err(|e| out_err(&json, e))?;
+    std::fs::write(&json, text + "\n").map_err(io(&json))?;
+    files.push(json);
+    let csvs = [
+        (
+            "builds.csv",
+            write_csv(&dir.join("builds.csv"), &res.builds),
+        ),
+        (
+            "traces.csv",
+            write_csv(&dir.join("traces.csv"), &res.traces),
+        ),
+        (
+            "dynamic.csv",
+            write_csv(&dir.join("dynamic.csv"), &res.dynamic),
+        ),
+    ];
+    for (name, written) in csvs {
+        written?;
+        files.push(dir.join(name));
+    }
+    let plots = plot::write_all(res, dir)?;
+    files.extend(plots.iter().map(|p| dir.join(&p.file)));
+    let summary = dir.join("summary.md");
+    std::fs::write(&summary, markdown(res, &plots, "")).map_err(io(&summary))?;
+    files.push(summary);
+    if let Some(report) = report {
+        let prefix = link_prefix(report, dir);
+        if let Some(parent) = report.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).map_err(io(parent))?;
+        }
+        std::fs::write(report, markdown(res, &plots, &prefix)).map_err(io(report))?;
+        files.push(report.to_path_buf());
+    }
+    Ok(files)
+}
+
+/// How the report at `report` reaches files in `dir`: a relative path when
+/// `dir` lies under the report's folder, else `dir` as given.
+fn link_prefix(report: &Path, dir: &Path) -> String {
+    let parent = report.parent().unwrap_or(Path::new(""));
+    let rel = dir.strip_prefix(parent).unwrap_or(dir);
+    let s = rel.to_string_lossy().replace('\\', "/");
+    if s.is_empty() {
+        String::new()
+    } else {
+        format!("{s}/")
+    }
+}
+
+fn f(x: f64) -> String {
+    if !x.is_finite() {
+        "–".into()
+    } else if x >= 100.0 {
+        format!("{x:.0}")
+    } else if x >= 10.0 {
+        format!("{x:.1}")
+    } else if x >= 0.1 {
+        format!("{x:.2}")
+    } else {
+        format!("{x:.3}")
+    }
+}
+
+fn mib(b: f64) -> String {
+    f(b / (1024.0 * 1024.0))
+}
+
+fn opt(x: Option<f64>) -> String {
+    x.map_or_else(|| "–".into(), f)
+}
+
+/// The default setting's label.
+const DEFAULT: &str = "cube r128 B8 S1";
+
+/// Total trace ms and rays of a backend (all ray types) for one scene.
+fn totals<'a>(rows: impl Iterator<Item = &'a TraceRow>) -> (f64, usize) {
+    rows.fold((0.0, 0), |(ms, n), r| (ms + r.trace_ms, n + r.rays))
+}
+
+/// Whether a DIRT setting promises brute force's hits (the camera-placed
+/// single view does not: it sees only its frustum).
+fn exact(setting: &str) -> bool {
+    !setting.starts_with("single@camera")
+}
+
+/// The Markdown report; `prefix` is put before plot file names.
+pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
+    let mut s = String::new();
+    let m = &res.machine;
+    let _ = writeln!(s, "# Results\n");
+    let _ = writeln!(
+        s,
+        "Written by `dirt eval` (regenerate with `scripts/eval`); do not edit by hand. \
+         Every figure below was measured in one run on {}.\n",
+        m.date
+    );
+    let _ = writeln!(s, "## Machine\n");
+    let _ = writeln!(s, "| | |\n|---|---|");
+    let _ = writeln!(s, "| CPU | {} |", m.cpu);
+    let _ = writeln!(s, "| cores | {} |", m.cores);
+    let _ = writeln!(
+        s,
+        "| threads | rayon pool of {0}: DIRT's CPU build and trace, brute force, the peers' traces; Embree builds on {0} threads; the obvhs build is single-threaded |",
+        m.rayon_threads
+    );
+    let _ = writeln!(
+        s,
+        "| GPU | {} |",
+        m.gpu
+            .as_deref()
+            .map_or_else(|| "not used".to_string(), |g| format!("{g} (figures marked dirt-gpu are this adapter; llvmpipe is Mesa's software rasteriser on the CPU)"))
+    );
+    let _ = writeln!(s, "| OS | {} |", m.os);
+    let _ = writeln!(
+        s,
+        "| build | {} |",
+        if m.release {
+            "release"
+        } else {
+            "debug (timings not meaningful)"
+        }
+    );
+    let _ = writeln!(s, "| run | {:.0} s wall |\n", res.wall_s);
+
+    let _ = writeln!(s, "## What was measured\n");
+    let _ = writeln!(s, "- Grid: {}; both traversals (linear, hiz).", res.grid);
+    let _ = writeln!(
+        s,
+        "- Rays: {} per ray type of 001 Table 1 (primary from the scene camera; shadow to points on emitters; specular; glossy, Phong exponent {}; diffuse, cosine) at the primary hits, seed fixed.",
+        res.rays_per_type,
+        crate::rays::GLOSSY_EXPONENT
+    );
+    let _ = writeln!(
+        s,
+        "- Times are medians of {} runs (GPU: 1–2). Trace times cover all rays of a type; Mrays/s = rays / time.",
+        res.repeat
+    );
+    let _ = writeln!(
+        s,
+        "- Error: rays whose closest hit differs from brute force's (the same watertight test, every triangle), counted on the first rays of each type (`compared`). For DIRT any bit of `prim, t, u, v`; for the peers, which use their own triangle tests, `prim` or `t` bits. Exact DIRT settings must show 0: anything else is a defect.",
+    );
+    let _ = writeln!(
+        s,
+        "- Peers: obvhs 0.4 (CWBVH, `fast_build` preset, its Möller–Trumbore test) and Embree 3 (default build quality, `rtcIntersect1` per ray) on the same triangles and rays.\n"
+    );
+
+    // Headline ratios.
+    let _ = writeln!(s, "## Headline: DIRT against the peers\n");
+    let _ = writeln!(
+        s,
+        "DIRT at the default setting ({DEFAULT}) on the CPU. Ratios are dirt / peer: \
+         above 1 means DIRT is slower (build, trace time) — trace ratios are of time over all ray types.\n"
+    );
+    let peers: Vec<String> = {
+        let mut p: Vec<String> = res
+            .builds
+            .iter()
+            .filter(|b| b.backend == "obvhs" || b.backend == "embree")
+            .map(|b| b.backend.clone())
+            .collect();
+        p.sort();
+        p.dedup();
+        p
+    };
+    let _ = write!(
+        s,
+        "| scene | triangles | DIRT build ms | DIRT trace Mrays/s (linear / hiz) |"
+    );
+    for p in &peers {
+        let _ = write!(
+            s,
+            " {p} build ms | {p} Mrays/s | build dirt/{p} | trace dirt/{p} (linear) |"
+        );
+    }
+    let _ = writeln!(s);
+    let _ = write!(s, "|---|---:|---:|---:|");
+    for _ in &peers {
+        let _ = write!(s, "---:|---:|---:|---:|");
+    }
+    let _ = writeln!(s);
+    for sc in &res.scenes {
+        let build = |backend: &str, setting: &str| {
+            res.builds
+                .iter()
+                .find(|b| b.scene == sc.name && b.backend == backend && b.setting == setting)
+                .map(|b| b.build_ms)
+        };
+        let trace = |backend: &str, setting: &str, trav: &str| {
+            totals(res.traces.iter().filter(|t| {
+                t.scene == sc.name
+                    && t.backend == backend
+                    && t.setting == setting
+                    && t.traversal == trav
+            }))
+        };
+        let Some(db) = build("dirt-cpu", DEFAULT) else {
+            continue;
+        };
+        let (lin_ms, lin_n) = trace("dirt-cpu", DEFAULT, "linear");
+        let (hiz_ms, hiz_n) = trace("dirt-cpu", DEFAULT, "hiz");
+        let _ = write!(
+            s,
+            "| {} | {} | {} | {} / {} |",
+            sc.name,
+            sc.triangles,
+            f(db),
+            f(mrays(lin_n, lin_ms)),
+            f(mrays(hiz_n, hiz_ms))
+        );
+        for p in &peers {
+            let pb = build(p, "");
+            let (pms, pn) = trace(p, "", "");
+            let _ = write!(
+                s,
+                " {} | {} | {} | {} |",
+                opt(pb),
+                f(mrays(pn, pms)),
+                opt(pb.map(|pb| db / pb)),
+                f(if pms > 0.0 { lin_ms / pms } else { f64::NAN })
+            );
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(s);
+    if !res.dynamic.is_empty() {
+        let tris = res.dynamic.first().map_or(0, |r| r.triangles);
+        let rays = res.dynamic.first().map_or(0, |r| r.rays);
+        let frames = res
+            .dynamic
+            .iter()
+            .map(|r| r.frame)
+            .max()
+            .map_or(0, |f| f + 1);
+        let _ = writeln!(
+            s,
+            "Fully dynamic scene (a deforming grid of {tris} triangles, every vertex moves every frame; {frames} frames of rebuild + trace of {rays} camera rays; medians per frame):\n"
+        );
+        let _ = writeln!(
+            s,
+            "| backend | build ms | trace ms | frame ms | frame dirt/backend | differ / compared (all frames) |\n|---|---:|---:|---:|---:|---:|"
+        );
+        let dirt = medians(&res.dynamic, "dirt-cpu");
+        let mut backends: Vec<&str> = res.dynamic.iter().map(|r| r.backend.as_str()).collect();
+        backends.sort_unstable();
+        backends.dedup();
+        for b in backends {
+            if let Some((bm, tm, fm)) = medians(&res.dynamic, b) {
+                let (d, c) = res
+                    .dynamic
+                    .iter()
+                    .filter(|r| r.backend == b)
+                    .fold((0, 0), |(d, c), r| (d + r.differ, c + r.compared));
+                let _ = writeln!(
+                    s,
+                    "| {b} | {} | {} | {} | {} | {d} / {c} |",
+                    f(bm),
+                    f(tm),
+                    f(fm),
+                    dirt.map_or_else(|| "–".into(), |(_, _, dfm)| f(dfm / fm))
+                );
+            }
+        }
+        let _ = writeln!(s);
+    }
+
+    // Errors.
+    let _ = writeln!(s, "## Error against brute force\n");
+    let dirt_bad: Vec<&TraceRow> = res
+        .traces
+        .iter()
+        .filter(|t| t.backend.starts_with("dirt") && exact(&t.setting) && t.differ > 0)
+        .collect();
+    let dyn_bad: usize = res
+        .dynamic
+        .iter()
+        .filter(|r| r.backend == "dirt-cpu")
+        .map(|r| r.differ)
+        .sum();
+    let dirt_compared: usize = res
+        .traces
+        .iter()
+        .filter(|t| t.backend.starts_with("dirt") && exact(&t.setting))
+        .map(|t| t.compared)
+        .sum();
+    if dirt_bad.is_empty() && dyn_bad == 0 {
+        let _ = writeln!(
+            s,
+            "**DIRT: 0 rays differ** from brute force in any bit, over {dirt_compared} compared ray traces of every exact setting, traversal, ray type and backend (and every frame of the dynamic scene).\n"
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "**DEFECT: DIRT differs from brute force** on {} (setting, traversal, ray type) rows and {dyn_bad} dynamic-scene rays. The rows:\n",
+            dirt_bad.len()
+        );
+        let _ = writeln!(
+            s,
+            "| scene | backend | setting | traversal | ray type | differ / compared |\n|---|---|---|---|---|---:|"
+        );
+        for t in &dirt_bad {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} / {} |",
+                t.scene, t.backend, t.setting, t.traversal, t.ray_type, t.differ, t.compared
+            );
+        }
+        let _ = writeln!(s);
+    }
+    let inexact: Vec<&TraceRow> = res
+        .traces
+        .iter()
+        .filter(|t| t.backend == "dirt-cpu" && !exact(&t.setting) && t.traversal == "linear")
+        .collect();
+    if !inexact.is_empty() {
+        let _ = writeln!(
+            s,
+            "The single view placed at the camera (the papers' setting for camera-centred effects) is not exact by design: it finds only hits inside its frustum. Its disagreement (linear traversal):\n"
+        );
+        let _ = writeln!(
+            s,
+            "| scene | ray type | differ / compared |\n|---|---|---:|"
+        );
+        for t in inexact {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} / {} |",
+                t.scene, t.ray_type, t.differ, t.compared
+            );
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(
+        s,
+        "Peers (their own, non-watertight triangle tests; `differ`: another primitive or `t` more than 1e-4 relative away; `prim`: another primitive or a hit/miss change):\n"
+    );
+    let _ = writeln!(
+        s,
+        "| scene | peer | ray type | differ | prim | compared |\n|---|---|---|---:|---:|---:|"
+    );
+    for t in res
+        .traces
+        .iter()
+        .filter(|t| t.backend == "obvhs" || t.backend == "embree")
+    {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} |",
+            t.scene, t.backend, t.ray_type, t.differ, t.differ_prim, t.compared
+        );
+    }
+    let _ = writeln!(s);
+
+    // Per scene.
+    for sc in &res.scenes {
+        let _ = writeln!(
+            s,
+            "## {} ({} triangles, `{}`)\n",
+            sc.name, sc.triangles, sc.spec
+        );
+        if let Some(p) = plots
+            .iter()
+            .find(|p| p.scene.as_deref() == Some(sc.name.as_str()))
+        {
+            let _ = writeln!(s, "![{}]({prefix}{})\n", p.title, p.file);
+        }
+        let _ = writeln!(
+            s,
+            "Build and memory per setting (MiB; model = 001 Table 3):\n"
+        );
+        let _ = writeln!(
+            s,
+            "| backend | setting | fill_depth ms | mip_depth ms | fill_primitives ms | build ms | nodes | depth+Hi-Z MiB (model) | id buffer MiB (model) | total MiB |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+        );
+        for b in res.builds.iter().filter(|b| b.scene == sc.name) {
+            let _ = writeln!(s, "{}", build_line(b));
+        }
+        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
+            "Trace at the default setting ({DEFAULT}), the peers and brute force (tiles, buckets, tests: per ray, over the compared rays):\n"
+        );
+        let _ = writeln!(
+            s,
+            "| ray type | backend | traversal | rays | Mrays/s | tiles | buckets | tests | differ / compared |\n|---|---|---|---:|---:|---:|---:|---:|---:|"
+        );
+        let mut rows: Vec<&TraceRow> = res
+            .traces
+            .iter()
+            .filter(|t| t.scene == sc.name && (t.setting == DEFAULT || t.setting.is_empty()))
+            .collect();
+        rows.sort_by_key(|t| {
+            (
+                ray_order(&t.ray_type),
+                t.backend.clone(),
+                t.traversal.clone(),
+            )
+        });
+        for t in rows {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} / {} |",
+                t.ray_type,
+                t.backend,
+                t.traversal,
+                t.rays,
+                f(t.mrays_per_s),
+                opt(t.tiles_per_ray),
+                opt(t.buckets_per_ray),
+                opt(t.tests_per_ray),
+                t.differ,
+                t.compared
+            );
+        }
+        let _ = writeln!(s);
+        // Every setting, all ray types together.
+        let _ = writeln!(
+            s,
+            "Every setting, all ray types together (DIRT on the CPU):\n"
+        );
+        let _ = writeln!(
+            s,
+            "| setting | traversal | Mrays/s | tiles | buckets | tests | differ / compared |\n|---|---|---:|---:|---:|---:|---:|"
+        );
+        let mut groups: BTreeMap<(String, String), Vec<&TraceRow>> = BTreeMap::new();
+        for t in res
+            .traces
+            .iter()
+            .filter(|t| t.scene == sc.name && t.backend == "dirt-cpu")
+        {
+            groups
+                .entry((t.setting.clone(), t.traversal.clone()))
+                .or_default()
+                .push(t);
+        }
+        for ((setting, trav), rows) in groups {
+            let (ms, n) = totals(rows.iter().copied());
+            let c: usize = rows.iter().map(|r| r.compared).sum();
+            let avg = |g: fn(&TraceRow) -> Option<f64>| {
+                let w: f64 = rows
+                    .iter()
+                    .map(|r| g(r).unwrap_or(0.0) * r.compared as f64)
+                    .sum();
+                w / c.max(1) as f64
+            };
+            let d: usize = rows.iter().map(|r| r.differ).sum();
+            let _ = writeln!(
+                s,
+                "| {setting} | {trav} | {} | {} | {} | {} | {d} / {c} |",
+                f(mrays(n, ms)),
+                f(avg(|r| r.tiles_per_ray)),
+                f(avg(|r| r.buckets_per_ray)),
+                f(avg(|r| r.tests_per_ray)),
+            );
+        }
+        let _ = writeln!(s);
+    }
+
+    let others: Vec<&Plot> = plots.iter().filter(|p| p.scene.is_none()).collect();
+    if !others.is_empty() {
+        let _ = writeln!(s, "## Sweeps and the dynamic scene\n");
+        for p in others {
+            let _ = writeln!(s, "![{}]({prefix}{})\n", p.title, p.file);
+        }
+    }
+    if !res.notes.is_empty() {
+        let _ = writeln!(s, "## Notes\n");
+        for n in &res.notes {
+            let _ = writeln!(s, "- {n}");
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(
+        s,
+        "Raw data: [results.json]({prefix}results.json), [builds.csv]({prefix}builds.csv), [traces.csv]({prefix}traces.csv), [dynamic.csv]({prefix}dynamic.csv)."
+    );
+    s
+}
+
+fn ray_order(t: &str) -> usize {
+    crate::rays::RayType::ALL
+        .iter()
+        .position(|r| r.name() == t)
+        .unwrap_or(usize::MAX)
+}
+
+fn build_line(b: &BuildRow) -> String {
+    let model = |bytes: Option<u64>, model: Option<f64>| match (bytes, model) {
+        (Some(b), Some(m)) => format!("{} ({})", mib(b as f64), mib(m)),
+        (Some(b), None) => mib(b as f64),
+        _ => "–".into(),
+    };
+    format!(
+        "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+        b.backend,
+        b.setting,
+        opt(b.fill_depth_ms),
+        opt(b.mip_depth_ms),
+        opt(b.fill_primitives_ms),
+        f(b.build_ms),
+        b.nodes.map_or_else(|| "–".into(), |n| n.to_string()),
+        model(b.depth_hiz_bytes, b.depth_hiz_model_bytes),
+        model(b.id_buffer_bytes, b.id_buffer_model_bytes),
+        b.total_bytes.map_or_else(|| "–".into(), |t| mib(t as f64)),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn links_are_relative_to_the_report() {
+        assert_eq!(
+            link_prefix(Path::new("docs/RESULTS.md"), Path::new("docs/results")),
+            "results/"
+        );
+        assert_eq!(
+            link_prefix(Path::new("RESULTS.md"), Path::new("out")),
+            "out/"
+        );
+        assert_eq!(
+            link_prefix(Path::new("a/R.md"), Path::new("/tmp/x")),
+            "/tmp/x/"
+        );
+    }
+}
