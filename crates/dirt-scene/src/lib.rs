@@ -333,7 +333,17 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// Reads a whole file, mapping errors to [`SceneError::NotFound`] /
 /// [`SceneError::Io`].
+/// Only regular files are read: a FIFO would block and a device such as
+/// `/dev/zero` would never end.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, SceneError> {
+    let meta = std::fs::metadata(path).map_err(|e| io_error(path, e))?;
+    if !meta.is_file() {
+        let e = std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a directory, device or pipe)",
+        );
+        return Err(io_error(path, e));
+    }
     std::fs::read(path).map_err(|e| io_error(path, e))
 }
 

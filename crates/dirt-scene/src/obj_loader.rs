@@ -1,15 +1,55 @@
 //! Wavefront OBJ loading (via `tobj`).
 
+use std::cell::RefCell;
+use std::io::Read;
 use std::path::Path;
 
 use dirt_math::{Triangle, Vec3};
 
 use crate::builder::SceneBuilder;
-use crate::{Material, Scene, SceneError, io_error, stem};
+use crate::{Material, Scene, SceneError, read_file, stem};
+
+/// Largest `.mtl` file read. Material libraries are small; the bound keeps a
+/// hostile `mtllib` line from exhausting memory.
+const MAX_MTL_BYTES: u64 = 64 << 20;
+
+/// Reads a material library named by an OBJ file: only regular files (a FIFO
+/// would block on open, `/dev/zero` never ends) and at most [`MAX_MTL_BYTES`].
+fn read_mtl(path: &Path) -> Result<Vec<u8>, String> {
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("not a regular file".to_string());
+    }
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut bytes = Vec::new();
+    file.take(MAX_MTL_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_MTL_BYTES {
+        return Err(format!("larger than {MAX_MTL_BYTES} bytes"));
+    }
+    Ok(bytes)
+}
 
 pub(crate) fn load_obj(path: &Path) -> Result<Scene, SceneError> {
-    // tobj reports only "open file failed"; check first to name the cause.
-    std::fs::File::open(path).map_err(|e| io_error(path, e))?;
+    // Read here rather than by tobj: it reports only "open file failed", and
+    // this refuses devices and pipes by name.
+    let bytes = read_file(path)?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mtl_problems = RefCell::new(Vec::new());
+    let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {
+        // Resolved as tobj's own `load_obj` does: relative to the OBJ file.
+        let full = base.join(mtl);
+        match read_mtl(&full) {
+            Ok(b) => tobj::load_mtl_buf(&mut &b[..]),
+            Err(problem) => {
+                mtl_problems
+                    .borrow_mut()
+                    .push(format!("{}: {problem}", full.display()));
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
     // `..Default::default()` covers the fields tobj's optional features add
     // when another crate in the build enables them.
     #[allow(clippy::needless_update)]
@@ -20,12 +60,19 @@ pub(crate) fn load_obj(path: &Path) -> Result<Scene, SceneError> {
         ignore_lines: true,
         ..Default::default()
     };
-    let (models, materials) = tobj::load_obj(path, &opts).map_err(|source| SceneError::Obj {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let (models, materials) =
+        tobj::load_obj_buf(&mut &bytes[..], &opts, material_loader).map_err(|source| {
+            SceneError::Obj {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+    drop(bytes);
 
     let mut b = SceneBuilder::new(&stem(path));
+    for problem in mtl_problems.into_inner() {
+        b.warn(format!("material library {problem}; skipped"));
+    }
     let n_mats = match materials {
         Ok(mats) => {
             let n = mats.len();
