@@ -14,8 +14,9 @@
 
 mod bench;
 mod eval;
-mod npy;
 mod raygen;
+
+use dirt_cli::npy;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
