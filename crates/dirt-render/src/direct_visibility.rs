@@ -1,0 +1,171 @@
+//! Stage `direct_visibility`: the primary hits.
+//!
+//! A z-buffer rasteriser on the CPU proposes, per pixel, the primitive
+//! closest at the pixel centre. It is only a proposal: the pixel's (jittered)
+//! primary ray is tested exactly against it, and when it is hit at `t`, the ray
+//! is traced with `tmax = t` (inclusive, so a primitive at the same `t` with a
+//! smaller id still wins) and the closer of the two under [`Hit::closer_than`]
+//! is kept; when it is missed, the ray is traced in full. Either way the
+//! result is the closest hit of the traced primary ray, bit for bit: the
+//! rasteriser can make the trace shorter, never change the image.
+
+use crate::RenderError;
+use crate::camera::Camera;
+use crate::trace::Tracer;
+use dirt_math::triangle::{RayShear, intersect};
+use dirt_math::{Hit, INVALID_ID, Ray, Triangle};
+
+/// One candidate primitive per pixel (`INVALID_ID`: none).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Raster {
+    pub width: u32,
+    pub height: u32,
+    pub prim: Vec<u32>,
+}
+
+/// How the primary hits of a batch were found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VisibilityStats {
+    /// Rays whose candidate the exact test confirmed (traced with `tmax = t`).
+    pub confirmed: u64,
+    /// Rays traced in full (no candidate, or the candidate missed).
+    pub fallback: u64,
+}
+
+/// Rasterises `tris` as `camera` sees them; the depth test keeps the smaller
+/// depth, and the smaller primitive id at equal depth. Triangles reaching
+/// behind the near distance are left out (their pixels fall back to the trace).
+pub fn rasterize(tris: &[Triangle], camera: &Camera, width: u32, height: u32) -> Raster {
+    let n = width as usize * height as usize;
+    let mut prim = vec![INVALID_ID; n];
+    let mut depth = vec![f32::INFINITY; n];
+    if camera.ortho_half_height.is_some() {
+        return Raster {
+            width,
+            height,
+            prim,
+        };
+    }
+    let scale = tris
+        .iter()
+        .flat_map(|t| t.v.iter().flatten())
+        .fold(0.0f32, |m, c| m.max(c.abs()));
+    let near = (scale + camera.eye.abs().max_element()) * 1e-5;
+    for (id, t) in tris.iter().enumerate() {
+        let mut s = [(0.0f32, 0.0f32, 0.0f32); 3];
+        let mut ok = true;
+        for (k, sk) in s.iter_mut().enumerate() {
+            match camera.project(t.vertex(k), width, height, near) {
+                Some(p) if p.0.is_finite() && p.1.is_finite() => *sk = p,
+                _ => ok = false,
+            }
+        }
+        if !ok {
+            continue;
+        }
+        let area = (s[1].0 - s[0].0) * (s[2].1 - s[0].1) - (s[2].0 - s[0].0) * (s[1].1 - s[0].1);
+        if area == 0.0 || !area.is_finite() {
+            continue;
+        }
+        let xmin = s
+            .iter()
+            .map(|p| p.0)
+            .fold(f32::INFINITY, f32::min)
+            .floor()
+            .max(0.0);
+        let xmax = s
+            .iter()
+            .map(|p| p.0)
+            .fold(f32::NEG_INFINITY, f32::max)
+            .ceil()
+            .min(width as f32);
+        let ymin = s
+            .iter()
+            .map(|p| p.1)
+            .fold(f32::INFINITY, f32::min)
+            .floor()
+            .max(0.0);
+        let ymax = s
+            .iter()
+            .map(|p| p.1)
+            .fold(f32::NEG_INFINITY, f32::max)
+            .ceil()
+            .min(height as f32);
+        if xmin >= xmax || ymin >= ymax {
+            continue;
+        }
+        let inv_area = 1.0 / area;
+        for y in ymin as u32..ymax as u32 {
+            let py = y as f32 + 0.5;
+            for x in xmin as u32..xmax as u32 {
+                let px = x as f32 + 0.5;
+                let edge = |a: (f32, f32, f32), b: (f32, f32, f32)| {
+                    (b.0 - a.0) * (py - a.1) - (px - a.0) * (b.1 - a.1)
+                };
+                let w0 = edge(s[1], s[2]) * inv_area;
+                let w1 = edge(s[2], s[0]) * inv_area;
+                let w2 = edge(s[0], s[1]) * inv_area;
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                // Perspective-correct depth: 1/z is linear in screen space.
+                let inv_z = w0 / s[0].2 + w1 / s[1].2 + w2 / s[2].2;
+                if !(inv_z > 0.0) {
+                    continue;
+                }
+                let z = 1.0 / inv_z;
+                let i = y as usize * width as usize + x as usize;
+                if z < depth[i] {
+                    depth[i] = z;
+                    prim[i] = id as u32;
+                }
+            }
+        }
+    }
+    Raster {
+        width,
+        height,
+        prim,
+    }
+}
+
+/// The closest hits of `rays`, where ray `i` belongs to pixel `pixels[i]`
+/// of `raster`: candidates confirmed exactly, traces limited by them.
+pub fn primary_hits(
+    tracer: &mut dyn Tracer,
+    tris: &[Triangle],
+    raster: &Raster,
+    rays: &[Ray],
+    pixels: &[usize],
+) -> Result<(Vec<Hit>, VisibilityStats), RenderError> {
+    let mut stats = VisibilityStats::default();
+    let mut limited = rays.to_vec();
+    let mut candidates = vec![Hit::MISS; rays.len()];
+    for (i, ray) in limited.iter_mut().enumerate() {
+        let c = raster.prim.get(pixels[i]).copied().unwrap_or(INVALID_ID);
+        let hit = tris
+            .get(c as usize)
+            .and_then(|t| intersect(ray, &RayShear::new(ray), t));
+        match hit {
+            Some((t, u, v)) => {
+                ray.tmax = t;
+                candidates[i] = Hit { prim: c, t, u, v };
+                stats.confirmed += 1;
+            }
+            None => stats.fallback += 1,
+        }
+    }
+    let traced = tracer.trace(&limited)?;
+    if traced.len() != rays.len() {
+        return Err(RenderError::HitCount {
+            expected: rays.len(),
+            got: traced.len(),
+        });
+    }
+    let hits = traced
+        .into_iter()
+        .zip(candidates)
+        .map(|(h, c)| if c.closer_than(&h) { c } else { h })
+        .collect();
+    Ok((hits, stats))
+}

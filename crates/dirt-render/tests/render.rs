@@ -1,0 +1,443 @@
+//! The renderer end to end on small images: DIRT renders equal the reference
+//! renders bit for bit, direct visibility equals traced primary rays, a white
+//! furnace converges to its analytic radiance, materials, textures and lights
+//! are used, and bad input is refused.
+
+use dirt_cpu::{AdsParams, Traversal};
+use dirt_math::{Ray, Triangle, Vec3};
+use dirt_render::direct_visibility::{self, rasterize};
+use dirt_render::metrics::{mean, rmse};
+use dirt_render::reference::Reference;
+use dirt_render::trace::{Brute, DirtCpu, Tracer};
+use dirt_render::{Camera, Mode, RenderError, Renderer, Settings};
+use dirt_scene::{Light, LightKind, Material, Scene, Texture};
+
+fn settings(w: u32, h: u32, spp: u32, bounces: u32, mode: Mode) -> Settings {
+    Settings {
+        width: w,
+        height: h,
+        spp,
+        bounces,
+        mode,
+        seed: 7,
+        ..Settings::default()
+    }
+}
+
+fn render_with(scene: &Scene, s: Settings, tracer: &mut dyn Tracer) -> dirt_render::Rendered {
+    let camera = Camera::for_scene(scene).expect("camera");
+    let r = Renderer::new(scene, camera, s).expect("renderer");
+    r.render(tracer, &mut |_| {}).expect("render")
+}
+
+fn render_cpu(scene: &Scene, s: Settings) -> dirt_render::Rendered {
+    let mut t = DirtCpu::build(&scene.triangles, &AdsParams::default(), Traversal::Linear)
+        .expect("dirt build");
+    render_with(scene, s, &mut t)
+}
+
+/// A deterministic soup of random triangles with a few materials and an emitter.
+fn soup(n: usize, seed: u64) -> Scene {
+    let mut x = seed;
+    let mut rnd = move || {
+        x = x
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((x >> 40) as f32) / (1u64 << 24) as f32
+    };
+    let mut triangles = Vec::new();
+    let mut tri_material = Vec::new();
+    for i in 0..n {
+        let c = Vec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0);
+        let mut v = [Vec3::ZERO; 3];
+        for p in &mut v {
+            *p = c + Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 0.6;
+        }
+        triangles.push(Triangle::new(v[0], v[1], v[2]));
+        tri_material.push((i % 4) as u32);
+    }
+    Scene {
+        triangles,
+        tri_material,
+        materials: vec![
+            Material::default(),
+            Material::diffuse("red", [0.8, 0.1, 0.1]),
+            Material {
+                metallic: 1.0,
+                roughness: 0.3,
+                ..Material::diffuse("gold", [0.9, 0.7, 0.3])
+            },
+            Material {
+                emissive: [4.0, 4.0, 4.0],
+                ..Material::default()
+            },
+        ],
+        name: "soup".into(),
+        ..Scene::default()
+    }
+}
+
+#[test]
+fn dirt_equals_reference_and_brute_pixel_for_pixel() {
+    let scenes = [
+        dirt_scene::open("cornell").expect("cornell"),
+        dirt_scene::open("spheres").expect("spheres"),
+        soup(300, 5),
+    ];
+    for scene in &scenes {
+        for mode in [Mode::Pt, Mode::Ao, Mode::Direct] {
+            let s = settings(20, 16, 2, 3, mode);
+            let dirt = render_cpu(scene, s);
+            let mut hiz = DirtCpu::build(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
+                .expect("dirt build");
+            let dirt_hiz = render_with(scene, s, &mut hiz);
+            let reference = render_with(scene, s, &mut Reference::build(&scene.triangles));
+            let brute = render_with(scene, s, &mut Brute::new(&scene.triangles));
+            assert!(
+                mean(&dirt.image) > 0.0,
+                "{} {mode:?}: black image",
+                scene.name
+            );
+            assert_eq!(
+                dirt.image.bits(),
+                reference.image.bits(),
+                "{} {mode:?}: dirt != reference",
+                scene.name
+            );
+            assert_eq!(
+                dirt.image.bits(),
+                dirt_hiz.image.bits(),
+                "{} {mode:?}: hiz",
+                scene.name
+            );
+            assert_eq!(
+                dirt.image.bits(),
+                brute.image.bits(),
+                "{} {mode:?}: brute",
+                scene.name
+            );
+            assert_eq!(dirt.rays, reference.rays);
+        }
+    }
+}
+
+#[test]
+fn direct_visibility_equals_traced_primary_rays() {
+    for scene in [
+        dirt_scene::open("cornell").expect("cornell"),
+        dirt_scene::open("spheres").expect("spheres"),
+        soup(500, 9),
+    ] {
+        let camera = Camera::for_scene(&scene).expect("camera");
+        let (w, h) = (48, 36);
+        let renderer = Renderer::new(&scene, camera, settings(w, h, 1, 1, Mode::Pt)).expect("r");
+        let raster = rasterize(&scene.triangles, &camera, w, h);
+        assert!(
+            raster
+                .prim
+                .iter()
+                .filter(|&&p| p != dirt_math::INVALID_ID)
+                .count()
+                > (w * h / 10) as usize,
+            "{}: the rasteriser proposes too little",
+            scene.name
+        );
+        let mut brute = Brute::new(&scene.triangles);
+        for sample in 0..3 {
+            let rays = renderer.primary_rays(sample);
+            let pixels: Vec<usize> = (0..rays.len()).collect();
+            let (hits, stats) = direct_visibility::primary_hits(
+                &mut brute,
+                &scene.triangles,
+                &raster,
+                &rays,
+                &pixels,
+            )
+            .expect("primary hits");
+            let truth = dirt_cpu::brute_force::trace(&scene.triangles, &rays);
+            for (i, (a, b)) in hits.iter().zip(&truth).enumerate() {
+                assert_eq!(a.bits(), b.bits(), "{}: pixel {i}", scene.name);
+            }
+            assert!(stats.confirmed > 0, "{}: nothing confirmed", scene.name);
+        }
+    }
+}
+
+/// A closed cube, every face emitting `le` towards the inside and reflecting
+/// with Lambertian albedo `albedo`, seen from inside.
+fn furnace(albedo: f32, le: f32) -> Scene {
+    let c = Vec3::ZERO;
+    let corners: Vec<Vec3> = (0..8)
+        .map(|i| {
+            Vec3::new(
+                if i & 1 == 0 { -1.0 } else { 1.0 },
+                if i & 2 == 0 { -1.0 } else { 1.0 },
+                if i & 4 == 0 { -1.0 } else { 1.0 },
+            )
+        })
+        .collect();
+    let quads = [
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 3, 7, 5],
+    ];
+    let mut triangles = Vec::new();
+    for q in quads {
+        for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            let (a, b, cc) = (corners[tri[0]], corners[tri[1]], corners[tri[2]]);
+            // Front faces (counter-clockwise) towards the inside.
+            let n = (b - a).cross(cc - a);
+            triangles.push(if n.dot(c - a) > 0.0 {
+                Triangle::new(a, b, cc)
+            } else {
+                Triangle::new(a, cc, b)
+            });
+        }
+    }
+    let n = triangles.len();
+    let mut cam = dirt_scene::Camera::look_at(
+        "inside",
+        Vec3::new(0.1, 0.2, 0.3),
+        Vec3::new(1.0, 0.4, -0.5),
+        Vec3::Y,
+        1.2,
+    );
+    cam.aspect = Some(1.0);
+    Scene {
+        triangles,
+        tri_material: vec![1; n],
+        materials: vec![
+            Material::default(),
+            Material {
+                emissive: [le; 3],
+                ..Material::diffuse("furnace", [albedo; 3])
+            },
+        ],
+        cameras: vec![cam],
+        name: "furnace".into(),
+        ..Scene::default()
+    }
+}
+
+/// With uniform emission `Le` and albedo `a` everywhere, a path of `K`
+/// scattering events sees `L = Le · (1 + a + … + a^K)` exactly in
+/// expectation (Russian roulette does not bias it). Tolerance: 1 % on the
+/// image mean with roulette off, 3 % with it on (noise only).
+#[test]
+fn white_furnace_converges_to_the_analytic_radiance() {
+    for (albedo, k, roulette, tol) in [
+        (1.0f32, 3u32, None, 0.01),
+        (0.5, 4, None, 0.01),
+        (0.8, 6, Some(2), 0.03),
+    ] {
+        let scene = furnace(albedo, 1.0);
+        let expected: f64 = (0..=k).map(|j| f64::from(albedo).powi(j as i32)).sum();
+        let s = Settings {
+            russian_roulette: roulette,
+            ..settings(16, 16, 32, k, Mode::Pt)
+        };
+        let r = render_with(&scene, s, &mut Reference::build(&scene.triangles));
+        let m = mean(&r.image);
+        assert!(
+            (m - expected).abs() <= tol * expected,
+            "albedo {albedo}, K = {k}: mean {m}, expected {expected}"
+        );
+    }
+}
+
+fn box_textured() -> Option<Scene> {
+    let path = "/usr/share/assimp/models/glTF2/BoxTextured-glTF/BoxTextured.gltf";
+    if !std::path::Path::new(path).exists() {
+        eprintln!("*** SKIPPING: {path} is not installed (assimp-testmodels) ***");
+        return None;
+    }
+    Some(dirt_scene::open(path).expect("BoxTextured"))
+}
+
+#[test]
+fn base_colour_textures_are_used() {
+    let Some(scene) = box_textured() else { return };
+    let tex = scene
+        .materials
+        .iter()
+        .find_map(|m| m.base_color_texture)
+        .expect("a textured material") as usize;
+    let s = settings(32, 32, 2, 1, Mode::Direct);
+    let with = |rgba: [u8; 4]| {
+        let mut sc = scene.clone();
+        let t = &sc.textures[tex];
+        sc.textures[tex] = Texture {
+            width: t.width,
+            height: t.height,
+            rgba8: rgba.repeat((t.width * t.height) as usize),
+        };
+        render_cpu(&sc, s).image
+    };
+    let original = render_cpu(&scene, s).image;
+    let red = with([255, 0, 0, 255]);
+    let white = with([255, 255, 255, 255]);
+    // Pixels that see the box: green and blue vanish under a red texture
+    // (pixels partly covering the white sky keep some).
+    let mut box_pixels = 0;
+    for (r, w) in red.pixels.iter().zip(&white.pixels) {
+        assert!(r[1] <= w[1] && r[2] <= w[2], "{r:?} {w:?}");
+        if r[1] < 0.05 * w[1] && r[2] < 0.05 * w[2] {
+            box_pixels += 1;
+        }
+    }
+    assert!(box_pixels > 100, "only {box_pixels} pixels see the box");
+    assert!(rmse(&original, &white).expect("size") > 0.01);
+    assert!(rmse(&original, &red).expect("size") > 0.01);
+}
+
+#[test]
+fn material_factors_are_used() {
+    let Some(mut scene) = box_textured() else {
+        return;
+    };
+    let s = settings(24, 24, 2, 1, Mode::Direct);
+    let before = render_cpu(&scene, s).image;
+    for m in &mut scene.materials {
+        m.base_color = [1.0, 0.0, 0.0, 1.0];
+    }
+    let after = render_cpu(&scene, s).image;
+    let green_before: f32 = before.pixels.iter().map(|p| p[1]).sum();
+    let green_after: f32 = after.pixels.iter().map(|p| p[1]).sum();
+    let red_after: f32 = after.pixels.iter().map(|p| p[0]).sum();
+    // The background (white sky) keeps its green; the box loses all of it.
+    assert!(
+        green_after < green_before * 0.9,
+        "{green_after} vs {green_before}"
+    );
+    assert!(red_after > green_after);
+}
+
+#[test]
+fn emitters_and_punctual_lights_light_the_scene() {
+    let cornell = dirt_scene::open("cornell").expect("cornell");
+    let s = settings(16, 16, 2, 2, Mode::Pt);
+    let lit = mean(&render_cpu(&cornell, s).image);
+    let mut dark = cornell.clone();
+    for m in &mut dark.materials {
+        m.emissive = [0.0; 3];
+    }
+    // A closed room without lights is black (the sky cannot get in).
+    assert_eq!(mean(&render_cpu(&dark, s).image), 0.0);
+    assert!(lit > 0.01);
+    let light = |kind| Light {
+        name: String::new(),
+        kind,
+        position: Vec3::new(0.0, 1.8, 0.5),
+        direction: Vec3::NEG_Y,
+        color: [1.0, 1.0, 1.0],
+        intensity: 3.0,
+        range: None,
+    };
+    let mut means = Vec::new();
+    for kind in [
+        LightKind::Point,
+        LightKind::Spot {
+            inner_cone: 0.2,
+            outer_cone: 0.4,
+        },
+    ] {
+        let mut sc = dark.clone();
+        sc.lights.push(light(kind));
+        let m = mean(&render_cpu(&sc, s).image);
+        assert!(m > 0.001, "{kind:?} lights nothing");
+        means.push(m);
+    }
+    assert!(
+        means[1] < means[0],
+        "a spot lights less than a point: {means:?}"
+    );
+    // A directional light outside a closed room is shadowed everywhere.
+    let mut sc = dark.clone();
+    sc.lights.push(light(LightKind::Directional));
+    assert_eq!(mean(&render_cpu(&sc, s).image), 0.0);
+}
+
+#[test]
+fn more_samples_reduce_the_error() {
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    let reference = render_with(
+        &scene,
+        Settings {
+            seed: 1000,
+            ..settings(12, 12, 256, 3, Mode::Pt)
+        },
+        &mut Reference::build(&scene.triangles),
+    )
+    .image;
+    let err = |spp| {
+        let img = render_cpu(&scene, settings(12, 12, spp, 3, Mode::Pt)).image;
+        rmse(&img, &reference).expect("size")
+    };
+    let (e1, e16) = (err(1), err(16));
+    assert!(e16 < e1 * 0.6, "rmse 1 spp {e1}, 16 spp {e16}");
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    let camera = Camera::for_scene(&scene).expect("camera");
+    let bad = [
+        settings(0, 10, 1, 1, Mode::Pt),
+        settings(10, 0, 1, 1, Mode::Pt),
+        settings(10, 10, 0, 1, Mode::Pt),
+        settings(10, 10, 1, 100_000, Mode::Pt),
+        Settings {
+            ao_radius: Some(-1.0),
+            ..settings(10, 10, 1, 1, Mode::Ao)
+        },
+    ];
+    for s in bad {
+        assert!(Renderer::new(&scene, camera, s).is_err(), "{s:?}");
+    }
+    let empty = Scene::default();
+    assert!(matches!(
+        Renderer::new(&empty, camera, Settings::default()),
+        Err(RenderError::EmptyScene)
+    ));
+    assert!(Camera::framing(&empty).is_err());
+    let mut broken = scene.clone();
+    broken.tri_material[0] = 1000;
+    assert!(matches!(
+        Renderer::new(&broken, camera, Settings::default()),
+        Err(RenderError::BadScene(_))
+    ));
+}
+
+#[test]
+fn png_and_exr_are_written_and_exr_is_linear() {
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    let img = render_cpu(&scene, settings(8, 6, 1, 1, Mode::Pt)).image;
+    let dir = std::env::temp_dir().join(format!("dirt-render-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let png = dir.join("a.png");
+    let exr = dir.join("a.exr");
+    img.write_png(&png, 0.0).expect("png");
+    img.write_exr(&exr).expect("exr");
+    let back = dirt_render::Image::read_exr(&exr).expect("read exr");
+    assert_eq!(back.bits(), img.bits());
+    let decoded = image::open(&png).expect("decode png").to_rgb8();
+    assert_eq!((decoded.width(), decoded.height()), (8, 6));
+    assert!(img.write_png(&dir.join("missing-dir/x.png"), 0.0).is_err());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn rays_are_valid_and_shadow_rays_respect_tmax() {
+    // An occluder beyond a segment's end does not block it.
+    let tri = Triangle::new(
+        Vec3::new(-1.0, -1.0, 2.0),
+        Vec3::new(1.0, -1.0, 2.0),
+        Vec3::new(0.0, 1.0, 2.0),
+    );
+    let r = Ray::new(Vec3::ZERO, Vec3::Z, 0.0, 1.0);
+    let mut b = Brute::new(&[tri]);
+    assert!(!b.trace(&[r]).expect("trace")[0].is_hit());
+}
