@@ -60,3 +60,6 @@ ensure_rust() {
 TEST_PACKAGES=(ca-certificates curl gcc libc6-dev python3 python3-numpy mesa-vulkan-drivers libvulkan1 assimp-testmodels)
 # What `scripts/run` needs.
 RUN_PACKAGES=(ca-certificates curl gcc libc6-dev python3 python3-numpy mesa-vulkan-drivers libvulkan1)
+# What `scripts/eval` needs: the above and Embree 3 (a peer); node/npm for the
+# bunny only where there is no npm yet (a nodejs from elsewhere may bundle it).
+EVAL_PACKAGES=("${TEST_PACKAGES[@]}" libembree-dev)

@@ -27,10 +27,10 @@ pub struct EvalArgs {
     /// optionally labelled as LABEL=SPEC. Repeat for several.
     #[arg(long = "scene", value_name = "[LABEL=]SPEC")]
     scenes: Vec<String>,
-    /// Rays per ray type (default: 4000 with --quick, else 20000).
+    /// Rays per ray type (default: 4000 with --quick, else 5000).
     #[arg(long, value_name = "N")]
     rays: Option<usize>,
-    /// Runs per measurement; medians are reported (default: 1 with --quick, else 3).
+    /// Runs per measurement; medians are reported (default: 1 with --quick, else 2).
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
     repeat: Option<u32>,
     /// Skip the GPU backend.

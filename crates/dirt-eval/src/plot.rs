@@ -103,7 +103,9 @@ pub fn write_all(res: &EvalResults, dir: &Path) -> Result<Vec<Plot>, EvalError> 
     for (knob, file) in [("B", "sweep_buckets.svg"), ("S", "sweep_tile.svg")] {
         if sweep(res, knob, &dir.join(file))? {
             plots.push(Plot {
-                title: format!("build and trace time against {knob} (cube, r128)"),
+                title: format!(
+                    "build and trace time against {knob}, relative to the default (cube, r128)"
+                ),
                 file: file.into(),
                 scene: None,
             });
@@ -223,8 +225,23 @@ fn sweep(res: &EvalResults, knob: &str, path: &Path) -> Result<bool, EvalError> 
     if lines.is_empty() {
         return Ok(false);
     }
+    // Each scene relative to its own value at the default (B 8, S 1), so
+    // scenes of very different sizes share one linear axis.
+    let base = if knob == "B" { 8.0 } else { 1.0 };
     for v in lines.values_mut() {
         v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some(&(_, b0, t0)) = v.iter().find(|p| p.0 == base) {
+            for p in v.iter_mut() {
+                p.1 /= b0;
+                p.2 /= t0;
+            }
+        } else {
+            v.clear();
+        }
+    }
+    lines.retain(|_, v| !v.is_empty());
+    if lines.is_empty() {
+        return Ok(false);
     }
     let root = SVGBackend::new(path, (960, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
@@ -235,25 +252,18 @@ fn sweep(res: &EvalResults, knob: &str, path: &Path) -> Result<bool, EvalError> 
         (right, 2usize, "trace, all ray types (linear)"),
     ] {
         let val = |p: &(f64, f64, f64)| if which == 1 { p.1 } else { p.2 };
-        let ymax = lines.values().flatten().map(val).fold(1e-3, f64::max) * 1.5;
-        let ymin = lines
-            .values()
-            .flatten()
-            .map(val)
-            .fold(ymax, f64::min)
-            .max(1e-3)
-            / 1.5;
+        let ymax = lines.values().flatten().map(val).fold(1.0, f64::max) * 1.1;
         let mut chart = ChartBuilder::on(&area)
             .caption(format!("{name} vs {knob}"), ("sans-serif", 16))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(55)
-            .build_cartesian_2d((1.0..xmax * 1.1).log_scale(), (ymin..ymax).log_scale())
+            .build_cartesian_2d(0.0..xmax * 1.05, 0.0..ymax)
             .map_err(|e| plot_err(path, e))?;
         chart
             .configure_mesh()
-            .x_desc(format!("{knob} (log)"))
-            .y_desc("ms (log)")
+            .x_desc(knob)
+            .y_desc(format!("time / time at {knob} = {base}"))
             .draw()
             .map_err(|e| plot_err(path, e))?;
         for (i, (scene, pts)) in lines.iter().enumerate() {
@@ -277,6 +287,7 @@ fn sweep(res: &EvalResults, knob: &str, path: &Path) -> Result<bool, EvalError> 
             .configure_series_labels()
             .border_style(BLACK)
             .background_style(WHITE.mix(0.8))
+            .position(SeriesLabelPosition::UpperLeft)
             .draw()
             .map_err(|e| plot_err(path, e))?;
     }

@@ -467,18 +467,30 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
             s,
             "| setting | traversal | Mrays/s | tiles | buckets | tests | differ / compared |\n|---|---|---:|---:|---:|---:|---:|"
         );
-        let mut groups: BTreeMap<(String, String), Vec<&TraceRow>> = BTreeMap::new();
+        // In grid order, then traversal.
+        let settings: Vec<&str> = res
+            .builds
+            .iter()
+            .filter(|b| b.scene == sc.name && b.backend == "dirt-cpu")
+            .map(|b| b.setting.as_str())
+            .collect();
+        let mut groups: BTreeMap<(usize, String), (String, Vec<&TraceRow>)> = BTreeMap::new();
         for t in res
             .traces
             .iter()
             .filter(|t| t.scene == sc.name && t.backend == "dirt-cpu")
         {
+            let i = settings
+                .iter()
+                .position(|s| *s == t.setting)
+                .unwrap_or(usize::MAX);
             groups
-                .entry((t.setting.clone(), t.traversal.clone()))
-                .or_default()
+                .entry((i, t.traversal.clone()))
+                .or_insert_with(|| (t.setting.clone(), Vec::new()))
+                .1
                 .push(t);
         }
-        for ((setting, trav), rows) in groups {
+        for ((_, trav), (setting, rows)) in groups {
             let (ms, n) = totals(rows.iter().copied());
             let c: usize = rows.iter().map(|r| r.compared).sum();
             let avg = |g: fn(&TraceRow) -> Option<f64>| {

@@ -1,0 +1,139 @@
+//! `dirt eval --quick` end to end with tiny counts: every output exists and
+//! parses, and DIRT's error against brute force is 0 in every row. No timing
+//! is asserted.
+
+use std::fs;
+use std::path::PathBuf;
+use std::process::Command;
+
+const DIRT: &str = env!("CARGO_BIN_EXE_dirt");
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("dirt-eval-{}-{name}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    dir
+}
+
+fn csv_rows(path: &PathBuf) -> Vec<csv::StringRecord> {
+    let mut r = csv::Reader::from_path(path).expect("open csv");
+    let headers = r.headers().expect("csv header").clone();
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.expect("csv row parses")).collect();
+    assert!(rows.iter().all(|x| x.len() == headers.len()));
+    let mut with_header = vec![headers];
+    with_header.extend(rows);
+    with_header
+}
+
+fn column(rows: &[csv::StringRecord], name: &str) -> usize {
+    rows[0]
+        .iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name}"))
+}
+
+#[test]
+fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
+    let dir = out_dir("quick");
+    let report = dir.join("RESULTS.md");
+    let out = Command::new(DIRT)
+        .args(["eval", "--quick", "--rays", "150", "--frames", "1", "--out"])
+        .arg(&dir)
+        .arg("--report")
+        .arg(&report)
+        .env("WGPU_BACKEND", "vulkan")
+        .output()
+        .expect("run dirt eval");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "dirt eval failed:\n{stderr}");
+
+    for f in [
+        "results.json",
+        "builds.csv",
+        "traces.csv",
+        "dynamic.csv",
+        "summary.md",
+        "pareto_cornell.svg",
+        "pareto_foliage.svg",
+        "dynamic.svg",
+    ] {
+        let p = dir.join(f);
+        assert!(
+            fs::metadata(&p).is_ok_and(|m| m.len() > 0),
+            "{} missing",
+            p.display()
+        );
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("results.json")).expect("read json"))
+            .expect("results.json parses");
+    assert_eq!(json["rays_per_type"], 150);
+    let scenes = json["scenes"].as_array().expect("scenes");
+    assert_eq!(scenes.len(), 2);
+
+    let traces = csv_rows(&dir.join("traces.csv"));
+    let (backend, differ, compared, ray_type, setting) = (
+        column(&traces, "backend"),
+        column(&traces, "differ"),
+        column(&traces, "compared"),
+        column(&traces, "ray_type"),
+        column(&traces, "setting"),
+    );
+    let dirt_rows: Vec<_> = traces[1..]
+        .iter()
+        .filter(|r| &r[backend] == "dirt-cpu")
+        .collect();
+    // 2 scenes × 5 grid points × 2 traversals × 5 ray types.
+    assert_eq!(dirt_rows.len(), 100);
+    for r in &dirt_rows {
+        assert_eq!(&r[differ], "0", "DIRT differs from brute force: {r:?}");
+        assert!(r[compared].parse::<usize>().expect("compared") > 0);
+    }
+    for t in ["primary", "shadow", "specular", "glossy", "diffuse"] {
+        assert!(dirt_rows.iter().any(|r| &r[ray_type] == t), "no {t} rays");
+    }
+    assert!(dirt_rows.iter().any(|r| &r[setting] == "cube r128 B8 S1"));
+    let peers: Vec<&str> = traces[1..]
+        .iter()
+        .map(|r| r.get(backend).unwrap_or(""))
+        .collect();
+    assert!(peers.contains(&"obvhs"));
+    assert_eq!(peers.contains(&"embree"), cfg!(feature = "embree"));
+
+    let dynamic = csv_rows(&dir.join("dynamic.csv"));
+    let (db, dd) = (column(&dynamic, "backend"), column(&dynamic, "differ"));
+    assert!(
+        dynamic[1..]
+            .iter()
+            .any(|r| &r[db] == "dirt-cpu" && &r[dd] == "0")
+    );
+    let builds = csv_rows(&dir.join("builds.csv"));
+    assert!(builds.len() > 10);
+
+    let md = fs::read_to_string(&report).expect("report");
+    assert!(md.contains("**DIRT: 0 rays differ**"), "{md}");
+    assert!(md.contains("(results/") || md.contains("pareto_cornell.svg"));
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn eval_rejects_zero_rays() {
+    let out = Command::new(DIRT)
+        .args(["eval", "--quick", "--rays", "0", "--out"])
+        .arg(out_dir("zero"))
+        .output()
+        .expect("run dirt eval");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--rays must be at least 1"));
+}
+
+#[test]
+fn eval_names_a_missing_scene() {
+    let out = Command::new(DIRT)
+        .args(["eval", "--quick", "--scene", "/nonexistent/x.glb", "--out"])
+        .arg(out_dir("missing"))
+        .output()
+        .expect("run dirt eval");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("/nonexistent/x.glb"), "{err}");
+}
