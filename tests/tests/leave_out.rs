@@ -109,3 +109,25 @@ fn an_empty_scene_stores_nothing_and_misses() {
     let (hits, _) = trace_with_stats(&ads, &[], &rays, Traversal::HiZ);
     assert!(!hits[0].is_hit());
 }
+
+#[test]
+fn left_out_views_say_why() {
+    use dirt_cpu::{LeftOutReason, left_out_views};
+    let (tris, params) = lopsided();
+    let left = left_out_views(&tris, &params).expect("views");
+    let names: Vec<&str> = left.iter().map(|l| l.name).collect();
+    assert_eq!(names, ["-X", "-Y", "+Z", "-Z"]);
+    assert!(
+        left.iter()
+            .all(|l| l.reason == LeftOutReason::NoTriangleReaches)
+    );
+    // A centre outside the bounds: the face looking away sees not even the bounds.
+    let outside = AdsParams {
+        center: Some(Vec3::new(-20.0, 1.0, 0.0)),
+        ..params
+    };
+    let left = left_out_views(&tris, &outside).expect("views");
+    let minus_x = left.iter().find(|l| l.name == "-X").expect("-X left out");
+    assert_eq!(minus_x.reason, LeftOutReason::BoundsBehind);
+    assert!(!left.iter().any(|l| l.name == "+X"), "+X sees everything");
+}

@@ -703,3 +703,59 @@ fn bench_prints_a_table_of_both_traversals() {
         assert!(json.contains(word), "bench json lacks {word:?}:\n{json}");
     }
 }
+
+#[test]
+fn explain_says_what_is_left_out_and_what_it_saves() {
+    // From far below cornell, only the +Y face sees the box.
+    let (out, _) = dirt_ok(&["info", "cornell", "--explain", "--center", "0,-30,0"]);
+    for face in ["+X", "-X", "+Z", "-Z"] {
+        assert!(
+            out.contains(&format!(
+                "view {face}: no triangle reaches any of its tiles"
+            )),
+            "{out}"
+        );
+    }
+    assert!(
+        out.contains("view -Y: no part of the scene bounds is in front of it"),
+        "{out}"
+    );
+    assert!(out.contains("measured: 1 of 6 views built"), "{out}");
+    assert!(out.contains("<- cheapest predicted"), "{out}");
+    assert!(out.contains("<- in use"), "{out}");
+    // Around the centre of the bounds every face sees geometry.
+    let (out, _) = dirt_ok(&["info", "cornell", "--explain", "--resolution", "32"]);
+    assert!(
+        out.contains("views: none; geometry reaches every view"),
+        "{out}"
+    );
+    assert!(out.contains("resolution 32 (given)"), "{out}");
+}
+
+#[test]
+fn auto_keeps_given_options_and_the_hits() {
+    let dir = TestDir::new("auto");
+    let rays = dir.path("rays.npy");
+    write_rays(&rays, 3000, 5);
+    let a = dir.path("default.npy");
+    let b = dir.path("auto.npy");
+    dirt_ok(&["trace", "cornell", "--rays", s(&rays), "--out", s(&a)]);
+    let (_, err) = dirt_ok(&[
+        "trace",
+        "cornell",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&b),
+        "--auto",
+        "--buckets",
+        "4",
+    ]);
+    assert!(err.contains("--auto: resolution"), "{err}");
+    assert!(err.contains("B = 4,"), "the given B is kept: {err}");
+    assert_eq!(
+        std::fs::read(&a).expect("read"),
+        std::fs::read(&b).expect("read"),
+        "every choice gives the same hits"
+    );
+}

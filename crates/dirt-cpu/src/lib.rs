@@ -13,6 +13,7 @@
 
 pub mod brute_force;
 pub mod cache;
+pub mod cost;
 pub mod fill_depth;
 pub mod fill_primitives;
 pub mod mip_depth;
@@ -169,6 +170,50 @@ pub fn views_reached(views: &ViewSet, tris: &[Triangle]) -> Vec<bool> {
                 })
         })
         .collect()
+}
+
+/// Why a view was left out of the structure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LeftOutReason {
+    /// No part of the scene bounds is in front of its near plane.
+    BoundsBehind,
+    /// The bounds reach it, but no triangle reaches any of its tiles.
+    NoTriangleReaches,
+}
+
+/// A view [`views_for`] leaves out: no passes, no memory, skipped by rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LeftOutView {
+    /// Index in the view set.
+    pub view: usize,
+    /// `+X`, `-X`, `+Y`, `-Y`, `+Z`, `-Z` for a cube face; `single` for the single view.
+    pub name: &'static str,
+    pub reason: LeftOutReason,
+}
+
+/// The views [`views_for`] leaves out for `tris` and `params`, with the reason.
+pub fn left_out_views(tris: &[Triangle], params: &AdsParams) -> Result<Vec<LeftOutView>, CpuError> {
+    let all = views_for_all(tris, params)?;
+    let reached = views_reached(&all, tris);
+    const FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
+    Ok(all
+        .views
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| !reached[k])
+        .map(|(k, v)| LeftOutView {
+            view: k,
+            name: match all.kind {
+                ViewsKind::Cube => FACES.get(k).copied().unwrap_or("?"),
+                ViewsKind::Single => "single",
+            },
+            reason: if v.has_content {
+                LeftOutReason::NoTriangleReaches
+            } else {
+                LeftOutReason::BoundsBehind
+            },
+        })
+        .collect())
 }
 
 /// [`views_for`] without leaving out the views no triangle reaches: every
