@@ -13,7 +13,7 @@ use crate::RenderError;
 use crate::camera::Camera;
 use crate::trace::Tracer;
 use dirt_math::triangle::{RayShear, intersect};
-use dirt_math::{Hit, INVALID_ID, Ray, Triangle};
+use dirt_math::{Hit, INVALID_ID, Ray, Triangle, Vec3};
 
 /// One candidate primitive per pixel (`INVALID_ID`: none).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -33,8 +33,8 @@ pub struct VisibilityStats {
 }
 
 /// Rasterises `tris` as `camera` sees them; the depth test keeps the smaller
-/// depth, and the smaller primitive id at equal depth. Triangles reaching
-/// behind the near distance are left out (their pixels fall back to the trace).
+/// depth, and the smaller primitive id at equal depth. Triangles are clipped
+/// at a near distance in front of the eye.
 pub fn rasterize(tris: &[Triangle], camera: &Camera, width: u32, height: u32) -> Raster {
     let n = width as usize * height as usize;
     let mut prim = vec![INVALID_ID; n];
@@ -51,48 +51,39 @@ pub fn rasterize(tris: &[Triangle], camera: &Camera, width: u32, height: u32) ->
         .flat_map(|t| t.v.iter().flatten())
         .fold(0.0f32, |m, c| m.max(c.abs()));
     let near = (scale + camera.eye.abs().max_element()) * 1e-5;
-    for (id, t) in tris.iter().enumerate() {
-        let mut s = [(0.0f32, 0.0f32, 0.0f32); 3];
-        let mut ok = true;
-        for (k, sk) in s.iter_mut().enumerate() {
-            match camera.project(t.vertex(k), width, height, near) {
-                Some(p) if p.0.is_finite() && p.1.is_finite() => *sk = p,
-                _ => ok = false,
-            }
-        }
-        if !ok {
-            continue;
-        }
+    let mut depth_test = |id: u32, s: [(f32, f32, f32); 3]| {
         let area = (s[1].0 - s[0].0) * (s[2].1 - s[0].1) - (s[2].0 - s[0].0) * (s[1].1 - s[0].1);
         if area == 0.0 || !area.is_finite() {
-            continue;
+            return;
         }
-        let xmin = s
+        let xs = [s[0].0, s[1].0, s[2].0];
+        let ys = [s[0].1, s[1].1, s[2].1];
+        let xmin = xs
             .iter()
-            .map(|p| p.0)
+            .copied()
             .fold(f32::INFINITY, f32::min)
             .floor()
             .max(0.0);
-        let xmax = s
+        let xmax = xs
             .iter()
-            .map(|p| p.0)
+            .copied()
             .fold(f32::NEG_INFINITY, f32::max)
             .ceil()
             .min(width as f32);
-        let ymin = s
+        let ymin = ys
             .iter()
-            .map(|p| p.1)
+            .copied()
             .fold(f32::INFINITY, f32::min)
             .floor()
             .max(0.0);
-        let ymax = s
+        let ymax = ys
             .iter()
-            .map(|p| p.1)
+            .copied()
             .fold(f32::NEG_INFINITY, f32::max)
             .ceil()
             .min(height as f32);
-        if xmin >= xmax || ymin >= ymax {
-            continue;
+        if !(xmin < xmax && ymin < ymax) {
+            return;
         }
         let inv_area = 1.0 / area;
         for y in ymin as u32..ymax as u32 {
@@ -117,9 +108,39 @@ pub fn rasterize(tris: &[Triangle], camera: &Camera, width: u32, height: u32) ->
                 let i = y as usize * width as usize + x as usize;
                 if z < depth[i] {
                     depth[i] = z;
-                    prim[i] = id as u32;
+                    prim[i] = id;
                 }
             }
+        }
+    };
+    for (id, t) in tris.iter().enumerate() {
+        // Clip against the near plane (depth along `forward` >= near) in
+        // world space, then project the (up to four) vertices and fan them.
+        let depth_of = |p: Vec3| (p - camera.eye).dot(camera.forward);
+        let mut poly: Vec<Vec3> = Vec::with_capacity(4);
+        for k in 0..3 {
+            let (a, b) = (t.vertex(k), t.vertex((k + 1) % 3));
+            let (da, db) = (depth_of(a) - near, depth_of(b) - near);
+            if da >= 0.0 {
+                poly.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                poly.push(a + (b - a) * (da / (da - db)));
+            }
+        }
+        if poly.len() < 3 {
+            continue;
+        }
+        let projected: Option<Vec<(f32, f32, f32)>> = poly
+            .iter()
+            .map(|&p| camera.project(p, width, height, near * 0.5))
+            .collect();
+        let Some(sp) = projected else { continue };
+        if sp.iter().any(|p| !(p.0.is_finite() && p.1.is_finite())) {
+            continue;
+        }
+        for k in 1..sp.len() - 1 {
+            depth_test(id as u32, [sp[0], sp[k], sp[k + 1]]);
         }
     }
     Raster {
