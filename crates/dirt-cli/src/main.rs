@@ -14,6 +14,7 @@
 
 mod bench;
 mod eval;
+mod explain;
 mod raygen;
 mod render;
 
@@ -25,7 +26,8 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::parser::ValueSource;
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use dirt_cpu::{Ads, AdsParams, BuildTimings, Traversal, ViewsKind};
 use dirt_gpu::{Gpu, GpuAds};
 use dirt_math::{Hit, Ray, Vec3};
@@ -118,6 +120,13 @@ struct InfoArgs {
     scene: SceneArg,
     #[command(flatten)]
     ads: AdsArgs,
+    /// Also say what the structure leaves out for this scene and why, what it
+    /// chose and why (with the cost model's ranking), measured against building every view.
+    #[arg(long)]
+    explain: bool,
+    /// Rays per frame the cost model of --explain and --auto predicts for.
+    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
+    rays_per_frame: u64,
 }
 
 #[derive(Debug, Args)]
@@ -157,9 +166,77 @@ struct AdsArgs {
     /// Centre of the views as "X,Y,Z" [default: centre of the scene bounds].
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_center, allow_hyphen_values = true)]
     center: Option<Vec3>,
+    /// Choose the resolution and B not given on the command line with the cost
+    /// model (dirt_cpu::cost), from a sample of rays; the hits are the same.
+    #[arg(long)]
+    auto: bool,
+    /// Which of the options above were given on the command line.
+    #[arg(skip)]
+    given: explain::Given,
 }
 
 impl AdsArgs {
+    /// Records which options the command line gave (the rest are defaults).
+    fn note_given(&mut self, m: &ArgMatches) {
+        let given = |id: &str| m.value_source(id) == Some(ValueSource::CommandLine);
+        self.given = explain::Given {
+            resolution: given("resolution"),
+            buckets: given("buckets"),
+            tile: given("tile"),
+        };
+    }
+
+    /// The parameters for `scene`: [`AdsArgs::params`], or with `--auto` the
+    /// cost model's cheapest candidate among those that keep every given option.
+    fn params_for(&self, scene: &Scene, rays_per_frame: u64) -> Result<AdsParams> {
+        let base = self.params();
+        if !self.auto {
+            return Ok(base);
+        }
+        let g = self.given;
+        let cands: Vec<AdsParams> = dirt_cpu::cost::candidates(&base)
+            .into_iter()
+            .map(|c| AdsParams {
+                resolution: if g.resolution {
+                    base.resolution
+                } else {
+                    c.resolution
+                },
+                buckets: if g.buckets { base.buckets } else { c.buckets },
+                tile: base.tile,
+                ..c
+            })
+            .filter(|c| c.validate().is_ok())
+            .collect();
+        let mut uniq: Vec<AdsParams> = Vec::new();
+        for c in cands {
+            if !uniq.contains(&c) {
+                uniq.push(c);
+            }
+        }
+        let sample = raygen::generate(&scene.triangles, None, RayKind::Mixed, 2000, 1)
+            .map_err(anyhow::Error::msg)
+            .context("--auto: cannot make the ray sample")?;
+        let ranked = dirt_cpu::cost::choose(
+            &scene.triangles,
+            &sample,
+            rays_per_frame,
+            Traversal::HiZ,
+            &dirt_cpu::cost::CostModel::CALIBRATED,
+            &uniq,
+        )
+        .context("--auto: cannot build the candidates")?;
+        let best = ranked.first().map_or(base, |c| c.params);
+        eprintln!(
+            "--auto: resolution {}, B = {}, S = {} (cheapest predicted frame of {rays_per_frame} rays among {} candidates)",
+            best.resolution,
+            best.buckets,
+            best.tile,
+            ranked.len()
+        );
+        Ok(best)
+    }
+
     fn params(&self) -> AdsParams {
         AdsParams {
             views: self.views.into(),
@@ -287,7 +364,18 @@ fn parse_center(s: &str) -> Result<Vec3, String> {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let mut cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
+    if let Some((_, sub)) = matches.subcommand() {
+        match &mut cli.command {
+            Command::Trace(a) => a.ads.note_given(sub),
+            Command::Info(a) => a.ads.note_given(sub),
+            _ => {}
+        }
+    }
     let result = match cli.command {
         Command::Trace(args) => trace(&args),
         Command::Triangles(args) => triangles(&args),
@@ -319,7 +407,7 @@ fn millis(d: Duration) -> f64 {
 }
 
 fn build_ads(scene: &Scene, ads: &AdsArgs) -> Result<(Ads, Duration)> {
-    let params = ads.params();
+    let params = ads.params_for(scene, 1_000_000)?;
     let start = Instant::now();
     let built = Ads::build(&scene.triangles, &params).with_context(|| {
         format!(
@@ -429,7 +517,7 @@ fn trace_gpu(
 }
 
 fn build_gpu_ads(gpu: &Gpu, scene: &Scene, ads: &AdsArgs) -> Result<(GpuAds, Duration)> {
-    let params = ads.params();
+    let params = ads.params_for(scene, 1_000_000)?;
     let start = Instant::now();
     let built = GpuAds::build(gpu, &scene.triangles, &params).with_context(|| {
         format!(
@@ -514,7 +602,7 @@ fn info(args: &InfoArgs) -> Result<()> {
             bounds.extent()
         );
     }
-    let params = args.ads.params();
+    let params = args.ads.params_for(&scene, args.rays_per_frame)?;
     let center = params.center.map_or_else(
         || format!("{} (bounds centre)", bounds.center()),
         |c| c.to_string(),
@@ -523,10 +611,18 @@ fn info(args: &InfoArgs) -> Result<()> {
         "ads: {} views, resolution {}, {} buckets, tile {}, centre {center}",
         args.ads.views, params.resolution, params.buckets, params.tile
     );
-    let (ads, build_time) = build_ads(&scene, &args.ads)?;
-    println!("build: {:.3} ms", millis(build_time));
+    let start = Instant::now();
+    let ads = Ads::build(&scene.triangles, &params)
+        .with_context(|| format!("cannot build the acceleration structure ({params:?})"))?;
+    println!("build: {:.3} ms", millis(start.elapsed()));
     println!("stats:\n{}", ads.stats());
     println!("memory:\n{}", ads.memory());
+    if args.explain {
+        print!(
+            "{}",
+            explain::explain(&scene, &params, args.ads.given, args.rays_per_frame)?
+        );
+    }
     Ok(())
 }
 
