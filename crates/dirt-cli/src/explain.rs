@@ -16,9 +16,17 @@ const SAMPLE: usize = 2000;
 /// Which build parameters the user gave (the rest are defaults or the model's).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Given {
+    pub views: bool,
     pub resolution: bool,
     pub buckets: bool,
     pub tile: bool,
+}
+
+fn views_name(v: ViewsKind) -> &'static str {
+    match v {
+        ViewsKind::Cube => "cube",
+        ViewsKind::Single => "single",
+    }
 }
 
 fn kib(bytes: u64) -> f64 {
@@ -42,10 +50,7 @@ pub fn explain(
     let _ = writeln!(
         o,
         "  views: {} — {}",
-        match params.views {
-            ViewsKind::Cube => "cube",
-            ViewsKind::Single => "single",
-        },
+        views_name(params.views),
         match (params.views, params.center) {
             (ViewsKind::Cube, _) =>
                 "six 90° views around one centre see all of space: exact for every ray",
@@ -61,10 +66,8 @@ pub fn explain(
         .map_err(anyhow::Error::msg)
         .context("cannot make the ray sample for the cost model")?;
     let model = CostModel::CALIBRATED;
-    let mut cands = candidates(params);
-    if !cands.iter().any(|c| {
-        c.resolution == params.resolution && c.buckets == params.buckets && c.tile == params.tile
-    }) {
+    let mut cands = candidates(params, !given.views);
+    if !cands.contains(params) {
         cands.push(*params);
     }
     let ranked = choose(
@@ -93,16 +96,15 @@ pub fn explain(
     );
     let _ = writeln!(
         o,
-        "    {:>10} {:>4} {:>4} {:>10} {:>10} {:>10} {:>10} {:>9}",
-        "resolution", "B", "S", "nodes", "tests/ray", "build ms", "frame ms", "KiB"
+        "    {:>6} {:>10} {:>4} {:>4} {:>10} {:>10} {:>10} {:>10} {:>9}",
+        "views", "resolution", "B", "S", "nodes", "tests/ray", "build ms", "frame ms", "KiB"
     );
     for (k, c) in ranked.iter().enumerate() {
-        let here = c.params.resolution == params.resolution
-            && c.params.buckets == params.buckets
-            && c.params.tile == params.tile;
+        let here = c.params == *params;
         let _ = writeln!(
             o,
-            "    {:>10} {:>4} {:>4} {:>10} {:>10.1} {:>10.1} {:>10.1} {:>9.0}{}{}",
+            "    {:>6} {:>10} {:>4} {:>4} {:>10} {:>10.1} {:>10.1} {:>10.1} {:>9.0}{}{}",
+            views_name(c.params.views),
             c.params.resolution,
             c.params.buckets,
             c.params.tile,
@@ -123,8 +125,10 @@ pub fn explain(
         let _ = writeln!(
             o,
             "    every candidate gives the same hits; pass --auto to build with the cheapest \
-             (here resolution {}, B = {}), or set --resolution/--buckets/--tile yourself",
-            best.params.resolution, best.params.buckets
+             (here {} views, resolution {}, B = {}), or set --views/--resolution/--buckets/--tile yourself",
+            views_name(best.params.views),
+            best.params.resolution,
+            best.params.buckets
         );
     }
 

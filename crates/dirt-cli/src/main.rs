@@ -166,8 +166,9 @@ struct AdsArgs {
     /// Centre of the views as "X,Y,Z" [default: centre of the scene bounds].
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_center, allow_hyphen_values = true)]
     center: Option<Vec3>,
-    /// Choose the resolution and B not given on the command line with the cost
-    /// model (dirt_cpu::cost), from a sample of rays; the hits are the same.
+    /// Choose the views (cube or single, both exact without --center), resolution and B
+    /// not given on the command line with the cost model (dirt_cpu::cost), from a
+    /// sample of rays; the hits are the same.
     #[arg(long)]
     auto: bool,
     /// Which of the options above were given on the command line.
@@ -180,6 +181,7 @@ impl AdsArgs {
     fn note_given(&mut self, m: &ArgMatches) {
         let given = |id: &str| m.value_source(id) == Some(ValueSource::CommandLine);
         self.given = explain::Given {
+            views: given("views"),
             resolution: given("resolution"),
             buckets: given("buckets"),
             tile: given("tile"),
@@ -194,7 +196,7 @@ impl AdsArgs {
             return Ok(base);
         }
         let g = self.given;
-        let cands: Vec<AdsParams> = dirt_cpu::cost::candidates(&base)
+        let cands: Vec<AdsParams> = dirt_cpu::cost::candidates(&base, !g.views)
             .into_iter()
             .map(|c| AdsParams {
                 resolution: if g.resolution {
@@ -228,7 +230,8 @@ impl AdsArgs {
         .context("--auto: cannot build the candidates")?;
         let best = ranked.first().map_or(base, |c| c.params);
         eprintln!(
-            "--auto: resolution {}, B = {}, S = {} (cheapest predicted frame of {rays_per_frame} rays among {} candidates)",
+            "--auto: {:?} views, resolution {}, B = {}, S = {} (cheapest predicted frame of {rays_per_frame} rays among {} candidates)",
+            best.views,
             best.resolution,
             best.buckets,
             best.tile,

@@ -17,7 +17,7 @@
 //! Only the *ranking* of candidates matters for [`choose`]; every candidate
 //! gives the same hits.
 
-use crate::{Ads, AdsParams, CpuError, Traversal, trace_with_stats};
+use crate::{Ads, AdsParams, CpuError, Traversal, ViewsKind, trace_with_stats};
 use dirt_math::{Ray, Triangle};
 
 /// Weights of the frame-cost model, in nanoseconds per unit.
@@ -216,17 +216,27 @@ pub struct Candidate {
 
 /// The candidates the model ranks: face resolution {64, 128, 256} × B {4, 8, 16}
 /// (S = 1; a tile of S pixels is the same structure as resolution / S), with
-/// the views and centre of `base`.
-pub fn candidates(base: &AdsParams) -> Vec<AdsParams> {
+/// the views and centre of `base`; with `both_views` and no centre, for the
+/// cube and for the single view too (placed outside the bounds, the single
+/// view sees the whole scene, so it is exact for every ray as the cube is).
+pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
+    let views = if both_views && base.center.is_none() {
+        vec![ViewsKind::Cube, ViewsKind::Single]
+    } else {
+        vec![base.views]
+    };
     let mut out = Vec::new();
-    for resolution in [64, 128, 256] {
-        for buckets in [4, 8, 16] {
-            out.push(AdsParams {
-                resolution,
-                buckets,
-                tile: 1,
-                ..*base
-            });
+    for views in views {
+        for resolution in [64, 128, 256] {
+            for buckets in [4, 8, 16] {
+                out.push(AdsParams {
+                    views,
+                    resolution,
+                    buckets,
+                    tile: 1,
+                    ..*base
+                });
+            }
         }
     }
     out
@@ -341,16 +351,20 @@ mod tests {
             1_000_000,
             Traversal::HiZ,
             &CostModel::CALIBRATED,
-            &candidates(&AdsParams::default()),
+            &candidates(&AdsParams::default(), true),
         )
         .expect("choose");
-        assert_eq!(ranked.len(), 9);
+        assert_eq!(ranked.len(), 18);
         assert!(ranked.windows(2).all(|w| w[0].frame_ms <= w[1].frame_ms));
         // Counts are exact: more buckets never put fewer nodes in the lists.
         let nodes = |r: u32, b: u32| {
             ranked
                 .iter()
-                .find(|c| c.params.resolution == r && c.params.buckets == b)
+                .find(|c| {
+                    c.params.resolution == r
+                        && c.params.buckets == b
+                        && c.params.views == ViewsKind::Cube
+                })
                 .map(|c| c.counts.nodes)
                 .expect("candidate")
         };
