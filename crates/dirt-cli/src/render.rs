@@ -108,7 +108,8 @@ enum RenderBackend {
 
 /// The camera: the scene's (or a framing), with the command line's overrides.
 fn camera(args: &RenderArgs, scene: &dirt_scene::Scene) -> Result<Camera> {
-    let base = Camera::for_scene(scene).context("cannot place a camera")?;
+    let base = Camera::for_scene(scene, args.width as f32 / args.height.max(1) as f32)
+        .context("cannot place a camera")?;
     if args.eye.is_none() && args.target.is_none() && args.fov.is_none() {
         return Ok(base);
     }

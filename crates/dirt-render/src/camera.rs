@@ -63,9 +63,9 @@ impl Camera {
         }
     }
 
-    /// The scene's first camera, else a framing of the bounds from the front
-    /// (+Z), slightly above, with a 45° vertical field of view.
-    pub fn for_scene(scene: &Scene) -> Result<Self, RenderError> {
+    /// The scene's first camera, else [`framing`](Self::framing) for an image
+    /// of the given aspect (width / height).
+    pub fn for_scene(scene: &Scene, aspect: f32) -> Result<Self, RenderError> {
         if let Some(c) = scene.cameras.first()
             && c.position.is_finite()
             && c.forward.is_finite()
@@ -79,23 +79,44 @@ impl Camera {
                     ortho_half_height: Some(ymag),
                     ..Self::from_frame(c.position, c.forward, c.up, 1.0)
                 },
-                _ => Self::framing(scene)?,
+                _ => Self::framing(scene, aspect)?,
             });
         }
-        Self::framing(scene)
+        Self::framing(scene, aspect)
     }
 
-    /// A view of the whole bounding sphere from the front (+Z), slightly above.
-    pub fn framing(scene: &Scene) -> Result<Self, RenderError> {
+    /// A view of the whole bounding box from the front (+Z), slightly above
+    /// and to the right, 45° vertical field of view, as close as keeps every
+    /// corner of the box inside an image of the given aspect (width / height).
+    pub fn framing(scene: &Scene, aspect: f32) -> Result<Self, RenderError> {
         let b = scene.bounds();
         if b.is_empty() {
             return Err(RenderError::EmptyScene);
         }
         let center = b.center();
-        let radius = (b.extent().length() * 0.5).max(1e-6);
         let fov = 45.0f32;
-        let dist = radius / (fov.to_radians() * 0.5).sin() * 1.05;
+        let tan = (fov.to_radians() * 0.5).tan();
+        let aspect = if aspect.is_finite() && aspect > 0.0 {
+            aspect
+        } else {
+            4.0 / 3.0
+        };
         let dir = Vec3::new(0.35, 0.35, 1.0).normalize();
+        let probe = Self::look_at(center + dir, center, fov)?;
+        let mut dist = 0.0f32;
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 { b.min.x } else { b.max.x },
+                if i & 2 == 0 { b.min.y } else { b.max.y },
+                if i & 4 == 0 { b.min.z } else { b.max.z },
+            );
+            let o = c - center;
+            let z = o.dot(probe.forward);
+            dist = dist
+                .max(o.dot(probe.right).abs() / (tan * aspect) - z)
+                .max(o.dot(probe.up).abs() / tan - z);
+        }
+        let dist = (dist * 1.05).max(b.extent().length() * 0.01).max(1e-6);
         Self::look_at(center + dir * dist, center, fov)
     }
 

@@ -25,7 +25,7 @@ fn settings(w: u32, h: u32, spp: u32, bounces: u32, mode: Mode) -> Settings {
 }
 
 fn render_with(scene: &Scene, s: Settings, tracer: &mut dyn Tracer) -> dirt_render::Rendered {
-    let camera = Camera::for_scene(scene).expect("camera");
+    let camera = Camera::for_scene(scene, s.width as f32 / s.height as f32).expect("camera");
     let r = Renderer::new(scene, camera, s).expect("renderer");
     r.render(tracer, &mut |_| {}).expect("render")
 }
@@ -128,7 +128,7 @@ fn direct_visibility_equals_traced_primary_rays() {
         dirt_scene::open("spheres").expect("spheres"),
         soup(500, 9),
     ] {
-        let camera = Camera::for_scene(&scene).expect("camera");
+        let camera = Camera::for_scene(&scene, 4.0 / 3.0).expect("camera");
         let (w, h) = (48, 36);
         let renderer = Renderer::new(&scene, camera, settings(w, h, 1, 1, Mode::Pt)).expect("r");
         let raster = rasterize(&scene.triangles, &camera, w, h);
@@ -383,7 +383,7 @@ fn more_samples_reduce_the_error() {
 #[test]
 fn bad_input_is_an_error() {
     let scene = dirt_scene::open("cornell").expect("cornell");
-    let camera = Camera::for_scene(&scene).expect("camera");
+    let camera = Camera::for_scene(&scene, 4.0 / 3.0).expect("camera");
     let bad = [
         settings(0, 10, 1, 1, Mode::Pt),
         settings(10, 0, 1, 1, Mode::Pt),
@@ -402,7 +402,7 @@ fn bad_input_is_an_error() {
         Renderer::new(&empty, camera, Settings::default()),
         Err(RenderError::EmptyScene)
     ));
-    assert!(Camera::framing(&empty).is_err());
+    assert!(Camera::framing(&empty, 1.0).is_err());
     let mut broken = scene.clone();
     broken.tri_material[0] = 1000;
     assert!(matches!(
