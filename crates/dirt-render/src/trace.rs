@@ -75,6 +75,16 @@ impl<'g> DirtGpu<'g> {
             cpu_finished: 0,
         })
     }
+
+    /// A tracer over a structure already built.
+    pub fn from_ads(gpu: &'g Gpu, ads: GpuAds, traversal: Traversal) -> Self {
+        Self {
+            gpu,
+            ads,
+            traversal,
+            cpu_finished: 0,
+        }
+    }
 }
 
 impl Tracer for DirtGpu<'_> {
