@@ -15,7 +15,7 @@ use std::io::{self, BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use dirt_math::{Hit, Ray, RayProblem, Triangle};
-use npyz::{DType, NpyFile, Order, TypeChar, WriteOptions, WriterBuilder};
+use npyz::{DType, NpyFile, NpyHeader, Order, TypeChar, WriteOptions, WriterBuilder};
 
 /// Floats per row of a rays file.
 pub const RAY_COLUMNS: u64 = 8;
@@ -158,11 +158,9 @@ pub fn read_triangles_from(reader: impl Read, path: &Path) -> Result<Vec<Triangl
 }
 
 /// Reads a C-order float32 array of shape `(N, columns)` as a flat vector.
-fn read_f32_matrix(reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f32>, CliError> {
-    let npy = NpyFile::new(reader).map_err(|e| CliError::NotNpy {
-        path: path.to_owned(),
-        reason: e.to_string(),
-    })?;
+fn read_f32_matrix(mut reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f32>, CliError> {
+    let header = read_header(&mut reader, path)?;
+    let npy = NpyFile::with_header(header, reader);
     let dtype = npy.dtype();
     let is_f32 = matches!(&dtype, DType::Plain(ts) if ts.type_char() == TypeChar::Float && ts.size_field() == 4);
     if !is_f32 {
@@ -205,6 +203,80 @@ fn read_f32_matrix(reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f
         )));
     }
     Ok(out)
+}
+
+/// Longest header accepted (numpy itself refuses more than 10 000 bytes by default).
+const MAX_HEADER_BYTES: usize = 1 << 20;
+
+/// Reads the header: magic, version, length and the dictionary, which is
+/// checked for a shape whose element count overflows before npyz sees it
+/// (npyz multiplies the dimensions unchecked and panics on overflow).
+fn read_header(reader: &mut impl Read, path: &Path) -> Result<NpyHeader, CliError> {
+    let not_npy = |reason: String| CliError::NotNpy {
+        path: path.to_owned(),
+        reason,
+    };
+    let mut prefix = vec![0u8; 8];
+    reader
+        .read_exact(&mut prefix)
+        .map_err(|_| not_npy("shorter than the 8-byte .npy preamble".into()))?;
+    if &prefix[..6] != b"\x93NUMPY" {
+        return Err(not_npy(
+            "it does not start with the .npy magic \\x93NUMPY".into(),
+        ));
+    }
+    let len_bytes = match prefix[6] {
+        1 => 2,
+        2 | 3 => 4,
+        v => return Err(not_npy(format!("unsupported .npy format version {v}"))),
+    };
+    let mut len = vec![0u8; len_bytes];
+    reader
+        .read_exact(&mut len)
+        .map_err(|_| not_npy("the header length is cut off".into()))?;
+    let header_len = len
+        .iter()
+        .rev()
+        .fold(0usize, |acc, &b| (acc << 8) | b as usize);
+    if header_len > MAX_HEADER_BYTES {
+        return Err(not_npy(format!(
+            "header of {header_len} bytes (at most {MAX_HEADER_BYTES} accepted)"
+        )));
+    }
+    prefix.extend(len);
+    let start = prefix.len();
+    prefix.resize(start + header_len, 0);
+    reader
+        .read_exact(&mut prefix[start..])
+        .map_err(|_| not_npy("the header is cut off".into()))?;
+    if let Some(dims) = shape_in(&prefix[start..])
+        && dims
+            .iter()
+            .filter(|&&d| d != 0)
+            .try_fold(1u64, |acc, &d| acc.checked_mul(d))
+            .is_none()
+    {
+        return Err(not_npy(format!(
+            "shape {} has more elements than a 64-bit count holds",
+            shape_text(&dims)
+        )));
+    }
+    NpyHeader::from_reader(&prefix[..]).map_err(|e| not_npy(e.to_string()))
+}
+
+/// The dimensions of the `'shape'` tuple of a header dictionary, when it is
+/// plain enough to read (npyz validates the rest).
+fn shape_in(dict: &[u8]) -> Option<Vec<u64>> {
+    let text = std::str::from_utf8(dict).ok()?;
+    let after = &text[text.find("shape")? + "shape".len()..];
+    let open = after.find('(')?;
+    let close = after[open..].find(')')? + open;
+    after[open + 1..close]
+        .split(',')
+        .map(|d| d.trim().trim_end_matches('L'))
+        .filter(|d| !d.is_empty())
+        .map(|d| d.parse::<u64>().ok())
+        .collect()
 }
 
 fn dtype_text(dtype: &DType) -> String {
@@ -529,6 +601,23 @@ mod tests {
         .expect_err("fortran");
         assert!(matches!(err, CliError::FortranOrder { .. }), "{err}");
         assert!(err.to_string().contains("C order"), "{err}");
+    }
+
+    /// Found by the `random_headers_into_the_rays_reader` property test:
+    /// npyz multiplied the dimensions unchecked and panicked.
+    #[test]
+    fn shape_overflowing_64_bits_is_refused() {
+        for shape in [[5u64, u64::MAX / 4], [0, 1 << 40]] {
+            let bytes = raw_npy("<f4", &shape, false, &[]);
+            let e = read(&bytes).expect_err("refused");
+            assert!(
+                matches!(e, CliError::NotNpy { .. } | CliError::Shape { .. }),
+                "{e}"
+            );
+        }
+        let bytes = raw_npy("<f4", &[1 << 40, 1 << 40, 8], false, &[]);
+        let e = read(&bytes).expect_err("refused").to_string();
+        assert!(e.contains("more elements than a 64-bit count holds"), "{e}");
     }
 
     #[test]
