@@ -39,6 +39,9 @@ pub struct EvalArgs {
     /// Skip the deforming scene.
     #[arg(long)]
     no_dynamic: bool,
+    /// Skip the path-traced renders (image error against time).
+    #[arg(long)]
+    no_render: bool,
     /// Frames of the deforming scene.
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
@@ -110,6 +113,9 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     }
     if args.no_gpu {
         cfg.gpu = None;
+    }
+    if args.no_render {
+        cfg.render = None;
     }
     if args.no_dynamic {
         cfg.dynamic = None;

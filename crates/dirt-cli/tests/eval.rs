@@ -55,6 +55,9 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         "pareto_cornell.svg",
         "pareto_foliage.svg",
         "dynamic.svg",
+        "renders.csv",
+        "renders.svg",
+        "render_reference.png",
     ] {
         let p = dir.join(f);
         assert!(
@@ -106,6 +109,11 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
             .iter()
             .any(|r| &r[db] == "dirt-cpu" && &r[dd] == "0")
     );
+    // DIRT and the renderer's BVH reference are both exact: the same images.
+    let renders = csv_rows(&dir.join("renders.csv"));
+    let same = column(&renders, "same_bits_as_reference_tracer");
+    assert!(renders.len() > 2);
+    assert!(renders[1..].iter().all(|r| &r[same] == "true"));
     let builds = csv_rows(&dir.join("builds.csv"));
     assert!(builds.len() > 10);
 

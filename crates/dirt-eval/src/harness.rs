@@ -12,6 +12,7 @@ use serde::Serialize;
 use crate::dynamic::{DynamicConfig, DynamicRow};
 use crate::peers::PeerKind;
 use crate::rays::{self, RayType};
+use crate::renders::{RenderConfig, RenderReference, RenderRow};
 use crate::{Disagreement, EvalError, Match, compare};
 
 /// One point of the parameter grid.
@@ -78,6 +79,7 @@ pub struct EvalConfig {
     pub gpu: Option<GpuConfig>,
     pub peers: Vec<PeerKind>,
     pub dynamic: Option<DynamicConfig>,
+    pub render: Option<RenderConfig>,
     pub seed: u64,
     /// Whether a progress bar may be drawn (only ever on a terminal).
     pub progress: bool,
@@ -120,6 +122,14 @@ impl EvalConfig {
                 grid: 32,
                 frames: 3,
                 rays: 4000,
+            }),
+            render: Some(RenderConfig {
+                scene: "cornell".into(),
+                width: 48,
+                height: 36,
+                bounces: 3,
+                reference_spp: 64,
+                spp: vec![1, 4, 16],
             }),
             seed: 1,
             progress: true,
@@ -165,6 +175,14 @@ impl EvalConfig {
                 grid: 128,
                 frames: 8,
                 rays: 5_000,
+            }),
+            render: Some(RenderConfig {
+                scene: "cornell".into(),
+                width: 128,
+                height: 96,
+                bounces: 4,
+                reference_spp: 256,
+                spp: vec![1, 2, 4, 8, 16, 32, 64],
             }),
             seed: 1,
             progress: true,
@@ -307,10 +325,16 @@ pub struct EvalResults {
     pub builds: Vec<BuildRow>,
     pub traces: Vec<TraceRow>,
     pub dynamic: Vec<DynamicRow>,
+    pub renders: Vec<RenderRow>,
+    pub render_reference: Option<RenderReference>,
+    pub render_settings_bounces: u32,
     /// What was skipped, and why.
     pub notes: Vec<String>,
     /// Wall time of the whole run, seconds.
     pub wall_s: f64,
+    /// The converged reference render (written as a PNG beside the plots).
+    #[serde(skip)]
+    pub render_image: Option<dirt_render::output::Image>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -448,7 +472,7 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
         }
     };
     let per_scene = cfg.grid.len() + cfg.peers.len() + usize::from(gpu.is_some()) + 1;
-    let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames);
+    let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames) + usize::from(cfg.render.is_some());
     let pb = progress_bar(
         (cfg.scenes.len() * per_scene + dyn_steps) as u64,
         cfg.progress,
@@ -547,6 +571,15 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
     if let Some(dc) = cfg.dynamic {
         pb.set_message("dynamic scene");
         res.dynamic = crate::dynamic::run(&dc, &cfg.peers, threads, cfg.seed, &pb, &mut res.notes)?;
+    }
+    if let Some(rc) = &cfg.render {
+        pb.set_message("renders");
+        let (rows, reference, image) = crate::renders::run(rc)?;
+        res.renders = rows;
+        res.render_reference = Some(reference);
+        res.render_settings_bounces = rc.bounces;
+        res.render_image = Some(image);
+        pb.inc(1);
     }
     pb.finish_and_clear();
     res.wall_s = start.elapsed().as_secs_f64();

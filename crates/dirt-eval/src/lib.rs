@@ -10,7 +10,9 @@
 //! * the same build and trace figures for the peers ([`peers`]: obvhs and,
 //!   with the `embree` feature, Embree 3);
 //! * the error of every setting: rays whose hit differs from brute force's;
-//! * the per-frame cost (rebuild + trace) on a deforming scene ([`dynamic`]).
+//! * the per-frame cost (rebuild + trace) on a deforming scene ([`dynamic`]);
+//! * the image error (RMSE, FLIP) of path-traced renders against a converged
+//!   reference as samples accumulate, against wall time ([`renders`]).
 //!
 //! [`report`] writes CSV, JSON, Markdown and plots ([`plot`]).
 //!
@@ -23,6 +25,7 @@ pub mod harness;
 pub mod peers;
 pub mod plot;
 pub mod rays;
+pub mod renders;
 pub mod report;
 
 pub use harness::{EvalConfig, EvalResults, run};
@@ -58,6 +61,8 @@ pub enum EvalError {
     },
     #[error("cannot write {path}: {message}")]
     Output { path: String, message: String },
+    #[error("render: {0}")]
+    Render(String),
     #[error("invalid configuration: {0}")]
     Config(String),
 }

@@ -37,6 +37,20 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> EvalError {
     }
 }
 
+/// A tick label with a few significant digits.
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if a >= 100.0 {
+        format!("{v:.0}")
+    } else if a >= 1.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
 /// One point of a Pareto plot.
 #[derive(Clone, Debug)]
 pub struct ParetoPoint {
@@ -111,6 +125,15 @@ pub fn write_all(res: &EvalResults, dir: &Path) -> Result<Vec<Plot>, EvalError> 
             });
         }
     }
+    if !res.renders.is_empty() {
+        let file = "renders.svg";
+        renders(res, &dir.join(file))?;
+        plots.push(Plot {
+            title: "path tracing: image error against wall time as samples accumulate".into(),
+            file: file.into(),
+            scene: None,
+        });
+    }
     if !res.dynamic.is_empty() {
         let file = "dynamic.svg";
         dynamic(res, &dir.join(file))?;
@@ -140,6 +163,7 @@ fn pareto(points: &[ParetoPoint], title: &str, path: &Path) -> Result<(), EvalEr
     chart
         .configure_mesh()
         .x_desc("build + trace of all ray types, ms (log)")
+        .x_label_formatter(&|v| short(*v))
         .y_desc("rays differing from brute force, %")
         .draw()
         .map_err(|e| plot_err(path, e))?;
@@ -326,6 +350,7 @@ fn dynamic(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
         .configure_mesh()
         .x_desc("frame")
         .y_desc("ms per frame (log)")
+        .y_label_formatter(&|v| short(*v))
         .draw()
         .map_err(|e| plot_err(path, e))?;
     for (i, b) in backends.iter().enumerate() {
@@ -348,6 +373,71 @@ fn dynamic(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
         .background_style(WHITE.mix(0.8))
         .draw()
         .map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(())
+}
+
+/// RMSE and FLIP against wall time, one line per tracer.
+fn renders(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
+    let root = SVGBackend::new(path, (960, 420)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let (left, right) = root.split_horizontally(480);
+    let mut tracers: Vec<&str> = res.renders.iter().map(|r| r.tracer.as_str()).collect();
+    tracers.sort_unstable();
+    tracers.dedup();
+    let xmax = res.renders.iter().map(|r| r.wall_ms).fold(1e-3, f64::max) * 1.5;
+    let xmin = res
+        .renders
+        .iter()
+        .map(|r| r.wall_ms)
+        .fold(xmax, f64::min)
+        .max(1e-3)
+        / 1.5;
+    for (area, which) in [(left, 0usize), (right, 1usize)] {
+        let val = |r: &crate::renders::RenderRow| if which == 0 { r.rmse } else { r.flip };
+        let ymax = res.renders.iter().map(val).fold(1e-9, f64::max) * 1.5;
+        let ymin = res.renders.iter().map(val).fold(ymax, f64::min).max(1e-9) / 1.5;
+        let name = if which == 0 { "RMSE" } else { "mean FLIP" };
+        let mut chart = ChartBuilder::on(&area)
+            .caption(format!("{name} vs wall time"), ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d((xmin..xmax).log_scale(), (ymin..ymax).log_scale())
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("render wall time, ms (log)")
+            .y_desc(format!("{name} (log)"))
+            .x_label_formatter(&|v| short(*v))
+            .y_label_formatter(&|v| short(*v))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        for (i, t) in tracers.iter().enumerate() {
+            let c = COLORS[i % COLORS.len()];
+            let pts: Vec<(f64, f64)> = res
+                .renders
+                .iter()
+                .filter(|r| r.tracer == *t)
+                .map(|r| (r.wall_ms, val(r)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+                .map_err(|e| plot_err(path, e))?
+                .label(*t)
+                .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], c));
+            chart
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+                .map_err(|e| plot_err(path, e))?;
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+    }
     root.present().map_err(|e| plot_err(path, e))?;
     Ok(())
 }

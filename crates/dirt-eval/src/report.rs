@@ -59,10 +59,19 @@ pub fn write_all(
             "dynamic.csv",
             write_csv(&dir.join("dynamic.csv"), &res.dynamic),
         ),
+        (
+            "renders.csv",
+            write_csv(&dir.join("renders.csv"), &res.renders),
+        ),
     ];
     for (name, written) in csvs {
         written?;
         files.push(dir.join(name));
+    }
+    if let Some(img) = &res.render_image {
+        let p = dir.join("render_reference.png");
+        img.write_png(&p, 0.0).map_err(|e| out_err(&p, e))?;
+        files.push(p);
     }
     let plots = plot::write_all(res, dir)?;
     files.extend(plots.iter().map(|p| dir.join(&p.file)));
@@ -396,6 +405,45 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     }
     let _ = writeln!(s);
 
+    if let Some(rr) = &res.render_reference {
+        let _ = writeln!(s, "## Renders: image error against time\n");
+        let first = res.renders.first();
+        let _ = writeln!(
+            s,
+            "Path tracing with `dirt-render` on {} at {}x{} ({} bounces). Reference: {} samples per pixel with another seed (rendered with the renderer's obvhs reference tracer in {:.1} s), so its own noise sets the floor of the curves. Each row is a separate render of the first `spp` samples; wall time includes building the tracer's structure. FLIP is the mean of `nv-flip` over the tone-mapped sRGB images.\n",
+            rr.scene,
+            first.map_or(0, |r| r.width),
+            first.map_or(0, |r| r.height),
+            res.render_settings_bounces,
+            rr.spp,
+            rr.wall_ms / 1e3
+        );
+        let _ = writeln!(s, "![converged reference]({prefix}render_reference.png)\n");
+        let _ = writeln!(
+            s,
+            "| tracer | spp | wall ms | trace ms | rays | RMSE | FLIP | same bits as the other tracer |\n|---|---:|---:|---:|---:|---:|---:|---|"
+        );
+        for r in &res.renders {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {:.5} | {:.5} | {} |",
+                r.tracer,
+                r.spp,
+                f(r.wall_ms),
+                f(r.trace_ms),
+                r.rays,
+                r.rmse,
+                r.flip,
+                if r.same_bits_as_reference_tracer {
+                    "yes"
+                } else {
+                    "**no**"
+                }
+            );
+        }
+        let _ = writeln!(s);
+    }
+
     // Per scene.
     for sc in &res.scenes {
         let _ = writeln!(
@@ -529,7 +577,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     }
     let _ = writeln!(
         s,
-        "Raw data: [results.json]({prefix}results.json), [builds.csv]({prefix}builds.csv), [traces.csv]({prefix}traces.csv), [dynamic.csv]({prefix}dynamic.csv)."
+        "Raw data: [results.json]({prefix}results.json), [builds.csv]({prefix}builds.csv), [traces.csv]({prefix}traces.csv), [dynamic.csv]({prefix}dynamic.csv), [renders.csv]({prefix}renders.csv)."
     );
     s
 }
