@@ -333,3 +333,310 @@ pub fn gpu() -> Option<&'static dirt_gpu::Gpu> {
     }
     g.as_ref()
 }
+
+/// The reduced matrix of the robustness cases: views {cube, single} × three
+/// (B, S) pairs; `trace` is then run with both traversals. `center` is used for
+/// the cube only (a single view with a centre sees only its frustum).
+pub fn robust_matrix(resolution: u32, center: Option<Vec3>) -> Vec<AdsParams> {
+    let mut out = Vec::new();
+    for views in [ViewsKind::Cube, ViewsKind::Single] {
+        for (buckets, tile) in [(8, 1), (1, 2), (32, 4)] {
+            out.push(AdsParams {
+                views,
+                resolution,
+                buckets,
+                tile,
+                center: if views == ViewsKind::Cube {
+                    center
+                } else {
+                    None
+                },
+            });
+        }
+    }
+    out
+}
+
+/// Asserts that CPU DIRT equals brute force bit for bit on every ray for
+/// every parameter set, and returns brute force's hits.
+pub fn assert_exact(name: &str, tris: &[Triangle], rays: &[Ray], params: &[AdsParams]) -> Vec<Hit> {
+    let truth = brute_force::trace(tris, rays);
+    let mut all = Vec::new();
+    for p in params {
+        all.extend(mismatches(tris, rays, &truth, p));
+    }
+    assert!(
+        all.is_empty(),
+        "{name}: {} mismatches, first: {}",
+        all.len(),
+        all.iter().take(5).cloned().collect::<Vec<_>>().join("\n")
+    );
+    truth
+}
+
+/// Rays from a closed mesh's triangles that leave its surface or start on it:
+/// the number of brute-force hits among `hits` (for "the test proves something" checks).
+pub fn hit_count(hits: &[Hit]) -> usize {
+    hits.iter().filter(|h| h.is_hit()).count()
+}
+
+/// How GPU DIRT differs from CPU DIRT on one scene, rays and parameters.
+#[derive(Clone, Debug, Default)]
+pub struct GpuDiff {
+    /// Hi-Z levels and id lists (compared as sets).
+    pub structure: Vec<String>,
+    /// Rays whose hit differs in any bit (either traversal).
+    pub hits: Vec<String>,
+    /// Rays whose hit is the same but whose statistics differ.
+    pub stats: Vec<String>,
+}
+
+impl GpuDiff {
+    pub fn is_empty(&self) -> bool {
+        self.structure.is_empty() && self.hits.is_empty() && self.stats.is_empty()
+    }
+    pub fn summary(&self) -> String {
+        let first: Vec<&String> = self
+            .structure
+            .iter()
+            .chain(&self.hits)
+            .chain(&self.stats)
+            .take(3)
+            .collect();
+        format!(
+            "{} structure, {} hit and {} statistics differences; first: {first:?}",
+            self.structure.len(),
+            self.hits.len(),
+            self.stats.len()
+        )
+    }
+}
+
+/// Compares GPU DIRT with CPU DIRT: Hi-Z levels, id lists as sets, and hits
+/// and statistics with both traversals. `None` when there is no GPU.
+pub fn gpu_differences(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> Option<GpuDiff> {
+    let g = gpu()?;
+    let cpu = Ads::build(tris, params).expect("cpu build");
+    let ads = dirt_gpu::GpuAds::build(g, tris, params).expect("gpu build");
+    let mut out = GpuDiff::default();
+    let hiz = ads.read_hiz(g).expect("read hi-z");
+    for (l, (a, b)) in hiz.iter().zip(&cpu.hiz).enumerate() {
+        let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
+        if differ > 0 || a.len() != b.len() {
+            out.structure
+                .push(format!("{params:?} Hi-Z level {l}: {differ} cells differ"));
+        }
+    }
+    let lists = ads.read_lists(g).expect("read lists");
+    let sorted = |l: &dirt_cpu::IdLists| -> Vec<Vec<u32>> {
+        l.offsets
+            .windows(2)
+            .map(|w| {
+                let mut v = l.ids[w[0] as usize..w[1] as usize].to_vec();
+                v.sort_unstable();
+                v
+            })
+            .collect()
+    };
+    if lists.offsets != cpu.lists.offsets || sorted(&lists) != sorted(&cpu.lists) {
+        out.structure.push(format!("{params:?}: id lists differ"));
+    }
+    for trav in [Traversal::Linear, Traversal::HiZ] {
+        let traced = dirt_gpu::trace::trace_report(g, &ads, rays, trav).expect("gpu trace");
+        let (ch, cs) = dirt_cpu::trace_with_stats(&cpu, tris, rays, trav);
+        for i in 0..rays.len() {
+            let line = || {
+                format!(
+                    "{params:?} {trav:?} ray {i} {:?}: gpu {:?} {:?} cpu {:?} {:?}",
+                    rays[i], traced.hits[i], traced.stats[i], ch[i], cs[i]
+                )
+            };
+            if traced.hits[i].bits() != ch[i].bits() {
+                out.hits.push(line());
+            } else if traced.stats[i] != cs[i] {
+                out.stats.push(line());
+            }
+        }
+    }
+    Some(out)
+}
+
+/// Asserts GPU == CPU in everything [`gpu_differences`] compares; skips without a GPU.
+pub fn assert_gpu_equals_cpu(name: &str, tris: &[Triangle], rays: &[Ray], params: &AdsParams) {
+    if let Some(d) = gpu_differences(tris, rays, params) {
+        assert!(
+            d.is_empty(),
+            "{name}: GPU differs from CPU: {}",
+            d.summary()
+        );
+    }
+}
+
+/// An indexed triangle mesh: shared vertices are the same `f32` values.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub vertices: Vec<Vec3>,
+    pub faces: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    pub fn triangles(&self) -> Vec<Triangle> {
+        self.faces
+            .iter()
+            .map(|f| {
+                Triangle::new(
+                    self.vertices[f[0] as usize],
+                    self.vertices[f[1] as usize],
+                    self.vertices[f[2] as usize],
+                )
+            })
+            .collect()
+    }
+
+    /// Every undirected edge once.
+    pub fn edges(&self) -> Vec<[u32; 2]> {
+        let mut e: Vec<[u32; 2]> = self
+            .faces
+            .iter()
+            .flat_map(|f| [[f[0], f[1]], [f[1], f[2]], [f[2], f[0]]])
+            .map(|[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        e.sort_unstable();
+        e.dedup();
+        e
+    }
+
+    /// True when every edge is shared by exactly two faces (a closed surface).
+    pub fn is_closed(&self) -> bool {
+        let mut e: Vec<[u32; 2]> = self
+            .faces
+            .iter()
+            .flat_map(|f| [[f[0], f[1]], [f[1], f[2]], [f[2], f[0]]])
+            .map(|[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        e.sort_unstable();
+        e.chunk_by(|a, b| a == b).all(|g| g.len() == 2)
+    }
+
+    /// The mesh moved by `p' = s·p + offset`.
+    pub fn transformed(&self, s: f32, offset: Vec3) -> Mesh {
+        Mesh {
+            vertices: self.vertices.iter().map(|&p| p * s + offset).collect(),
+            faces: self.faces.clone(),
+        }
+    }
+}
+
+/// A geodesic sphere: an icosahedron subdivided `levels` times, each new
+/// vertex made once and shared.
+pub fn icosphere(center: Vec3, r: f32, levels: u32) -> Mesh {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut vertices: Vec<Vec3> = [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ]
+    .iter()
+    .map(|&[x, y, z]| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut faces: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid = std::collections::HashMap::new();
+        let mut next = Vec::with_capacity(faces.len() * 4);
+        for f in &faces {
+            let mut m = [0u32; 3];
+            for k in 0..3 {
+                let (a, b) = (f[k], f[(k + 1) % 3]);
+                m[k] = *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    vertices
+                        .push(((vertices[a as usize] + vertices[b as usize]) * 0.5).normalize());
+                    (vertices.len() - 1) as u32
+                });
+            }
+            next.extend([
+                [f[0], m[0], m[2]],
+                [f[1], m[1], m[0]],
+                [f[2], m[2], m[1]],
+                [m[0], m[1], m[2]],
+            ]);
+        }
+        faces = next;
+    }
+    Mesh {
+        vertices: vertices.into_iter().map(|p| center + p * r).collect(),
+        faces,
+    }
+}
+
+/// A closed axis-aligned box with each face split into `n`×`n` quads (two
+/// triangles each); vertices on shared edges are the same values.
+pub fn box_mesh(min: Vec3, max: Vec3, n: u32) -> Mesh {
+    let mut m = Mesh::default();
+    let mut index = std::collections::HashMap::new();
+    let mut vid = |m: &mut Mesh, g: [u32; 3]| -> u32 {
+        *index.entry(g).or_insert_with(|| {
+            let f = |k: usize| {
+                let s = g[k] as f32 / n as f32;
+                min[k] + (max[k] - min[k]) * s
+            };
+            m.vertices.push(Vec3::new(f(0), f(1), f(2)));
+            (m.vertices.len() - 1) as u32
+        })
+    };
+    // Each face: the fixed axis, its side, and two running axes.
+    for axis in 0..3 {
+        for side in [0, n] {
+            let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+            for j in 0..n {
+                for i in 0..n {
+                    let g = |di: u32, dj: u32| {
+                        let mut g = [0u32; 3];
+                        g[axis] = side;
+                        g[a] = i + di;
+                        g[b] = j + dj;
+                        g
+                    };
+                    let q = [
+                        vid(&mut m, g(0, 0)),
+                        vid(&mut m, g(1, 0)),
+                        vid(&mut m, g(1, 1)),
+                        vid(&mut m, g(0, 1)),
+                    ];
+                    m.faces.push([q[0], q[1], q[2]]);
+                    m.faces.push([q[0], q[2], q[3]]);
+                }
+            }
+        }
+    }
+    m
+}

@@ -22,7 +22,10 @@ const CHUNK: usize = 1 << 18;
 /// The primitive id the shader writes for a ray that ran out of its work budget.
 pub const UNFINISHED: u32 = 0xffff_fffe;
 
-/// Closest hits and per-ray statistics of `rays`.
+/// Closest hits and per-ray statistics of `rays`. Rays that fail
+/// [`Ray::validate`] (non-finite values, a zero direction, a bad range) miss,
+/// as in `dirt_cpu::trace` and `dirt_cpu::brute_force::trace`; so does a
+/// valid ray whose hit parameter `t` would overflow `f32`.
 pub fn trace(
     gpu: &Gpu,
     ads: &GpuAds,

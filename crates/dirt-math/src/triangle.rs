@@ -101,7 +101,8 @@ pub fn edge_function(a: f32, b: f32, c: f32, d: f32) -> f32 {
 /// Intersects `ray` with `tri`. Returns `(t, u, v)` with `t` in `[tmin, tmax]`,
 /// `u` the weight of vertex 1 and `v` of vertex 2, or `None`.
 ///
-/// Degenerate triangles (zero sheared area) are never hit. Back faces are hit.
+/// Degenerate triangles (zero area, see [`is_degenerate`], or zero sheared area)
+/// are never hit. Back faces are hit.
 /// A reported hit point `origin + t·dir` lies within `2^-15 · max|vertex − origin|`
 /// of the triangle point its barycentrics name: candidates that fail this (rays in
 /// the plane of a triangle, where even accurate edge functions cannot place the

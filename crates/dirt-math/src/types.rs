@@ -42,7 +42,9 @@ impl Ray {
         )
     }
     /// Why this ray cannot be traced, if it cannot: non-finite values, a zero
-    /// direction, or an empty or negative parameter range.
+    /// direction, or an empty or negative parameter range. Every tracer
+    /// (`dirt_cpu::trace`, brute force, `dirt_gpu::trace`) returns a miss for
+    /// such a ray; the command line refuses the file, naming the row.
     pub fn validate(&self) -> Result<(), RayProblem> {
         if !self.origin.iter().all(|c| c.is_finite()) {
             return Err(RayProblem::NonFiniteOrigin);
