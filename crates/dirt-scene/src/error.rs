@@ -134,6 +134,18 @@ pub enum SceneError {
         source: tobj::LoadError,
     },
 
+    /// An OBJ file that is not UTF-8 text (tobj would say only "read error").
+    #[error(
+        "{}: invalid OBJ: not UTF-8 text (first bad byte at offset {offset}{}); OBJ files are text",
+        .path.display(),
+        if *.utf16 { ", and it looks like UTF-16: convert it to UTF-8" } else { "" }
+    )]
+    ObjNotText {
+        path: PathBuf,
+        offset: usize,
+        utf16: bool,
+    },
+
     /// An OBJ model's arrays are inconsistent.
     #[error("{}: {location}: {problem}", .path.display())]
     ObjMesh {

@@ -35,6 +35,17 @@ pub(crate) fn load_obj(path: &Path) -> Result<Scene, SceneError> {
     // Read here rather than by tobj: it reports only "open file failed", and
     // this refuses devices and pipes by name.
     let bytes = read_file(path)?;
+    if let Err(e) = std::str::from_utf8(&bytes) {
+        // A byte-order mark or NULs between ASCII letters: UTF-16.
+        let utf16 = bytes.starts_with(&[0xfe, 0xff])
+            || bytes.starts_with(&[0xff, 0xfe])
+            || bytes.iter().take(64).filter(|&&b| b == 0).count() >= 16;
+        return Err(SceneError::ObjNotText {
+            path: path.to_path_buf(),
+            offset: e.valid_up_to(),
+            utf16,
+        });
+    }
     let base = path.parent().unwrap_or(Path::new(""));
     let mtl_problems = RefCell::new(Vec::new());
     let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {

@@ -229,3 +229,14 @@ fn obj_models() {
     let e = load_no_panic(&assimp_models().join("invalid/malformed.obj")).unwrap_err();
     assert!(matches!(e, SceneError::Obj { .. }), "{e:?}");
 }
+
+#[test]
+fn obj_that_is_not_utf8_text_says_so() {
+    let e = load_no_panic(&assimp_models().join("OBJ/box_UTF16BE.obj")).unwrap_err();
+    assert!(
+        matches!(e, SceneError::ObjNotText { utf16: true, .. }) && e.to_string().contains("UTF-16"),
+        "{e}"
+    );
+    let e = load_no_panic(&assimp_models().join("OBJ/regr01.obj")).unwrap_err();
+    assert!(matches!(e, SceneError::ObjNotText { .. }), "{e}");
+}
