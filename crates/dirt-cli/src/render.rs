@@ -62,6 +62,10 @@ pub struct RenderArgs {
     /// Vertical field of view in degrees.
     #[arg(long, value_name = "DEG")]
     fov: Option<f32>,
+    /// A linear EXR of the same size (e.g. a high-spp render) to print the
+    /// root-mean-square error against.
+    #[arg(long, value_name = "REF.exr")]
+    reference: Option<PathBuf>,
     /// Exposure of the PNG in stops (the EXR is not scaled).
     #[arg(
         long,
@@ -257,5 +261,12 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         rendered.visibility.confirmed,
         rendered.visibility.fallback,
     );
+    if let Some(path) = &args.reference {
+        let reference = dirt_render::Image::read_exr(path)
+            .with_context(|| format!("cannot read the reference {}", path.display()))?;
+        let e = dirt_render::metrics::rmse(&rendered.image, &reference)
+            .with_context(|| format!("cannot compare with {}", path.display()))?;
+        eprintln!("rmse against {}: {e:.6}", path.display());
+    }
     Ok(())
 }

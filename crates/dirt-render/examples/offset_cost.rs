@@ -18,6 +18,9 @@ use dirt_render::shade::offset_origin;
 use dirt_render::{Camera, Renderer, Settings};
 use rayon::prelude::*;
 
+/// A surface point and the point the ray to it came from.
+type Vertex = (SurfacePoint, [f32; 3]);
+
 /// Brute force, leaving out primitive `skip`.
 fn closest_skipping(tris: &[Triangle], ray: &Ray, skip: u32) -> Hit {
     let sh = RayShear::new(ray);
@@ -60,14 +63,14 @@ fn main() {
         let tris = &scene.triangles;
         let rays = r.primary_rays(0);
         let hits = dirt_cpu::brute_force::trace(tris, &rays);
-        let mut points: Vec<(SurfacePoint, [f32; 3])> = rays
+        let mut points: Vec<Vertex> = rays
             .iter()
             .zip(&hits)
             .filter_map(|(ray, h)| r.fetcher.fetch(ray, h).map(|sp| (sp, ray.origin)))
             .collect();
         let (mut total, mut differ, mut self_hits) = (0usize, 0usize, 0usize);
         for bounce in 1..=2u32 {
-            let results: Vec<(bool, bool, Option<(SurfacePoint, [f32; 3])>)> = points
+            let results: Vec<(bool, bool, Option<Vertex>)> = points
                 .par_iter()
                 .enumerate()
                 .filter_map(|(i, (sp, from))| {

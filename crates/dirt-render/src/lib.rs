@@ -76,6 +76,8 @@ pub enum RenderError {
     Gpu(#[from] dirt_gpu::GpuError),
     #[error("cannot write {path}: {message}")]
     Write { path: PathBuf, message: String },
+    #[error("cannot read {path}: {message}")]
+    Read { path: PathBuf, message: String },
 }
 
 /// What a render computes per pixel.

@@ -82,7 +82,10 @@ impl Image {
 
     /// Reads a linear EXR written by [`write_exr`](Self::write_exr).
     pub fn read_exr(path: &Path) -> Result<Self, RenderError> {
-        let img = image::open(path).map_err(|e| write_error(path, &e.to_string()))?;
+        let img = image::open(path).map_err(|e| RenderError::Read {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
         let rgb = img.to_rgb32f();
         Ok(Self {
             width: rgb.width(),
