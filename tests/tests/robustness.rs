@@ -839,6 +839,29 @@ fn a_thousand_layers_under_one_pixel() {
         .into_iter()
         .filter(|p| p.buckets != 1)
         .collect();
+    // The single view sees the whole stack: some tile lists at least 1000 layers.
+    let single = params
+        .iter()
+        .find(|p| p.views == ViewsKind::Single)
+        .expect("a single view");
+    let ads = Ads::build(&tris, single).expect("build");
+    let b = single.buckets as usize;
+    let deepest = ads
+        .lists
+        .offsets
+        .chunks(b)
+        .zip(ads.lists.offsets[1..].chunks(b))
+        .map(|(starts, ends)| {
+            let mut ids: Vec<u32> = (starts[0]..ends[ends.len() - 1])
+                .map(|k| ads.lists.ids[k as usize] / 2)
+                .collect();
+            ids.sort_unstable();
+            ids.dedup();
+            ids.len()
+        })
+        .max()
+        .unwrap_or(0);
+    assert!(deepest >= 1000, "deepest tile holds {deepest} layers");
     let truth = assert_exact("1000 layers", &tris, &rays, &params);
     assert!(hit_count(&truth) * 2 > rays.len());
     // The per-ray GPU work budget is exceeded here; such rays are finished on the CPU.
