@@ -205,6 +205,20 @@ pub struct Machine {
     pub date: String,
     /// Whether this binary was built with optimisations.
     pub release: bool,
+    /// 1-minute load average at the start and the end of the run: above the
+    /// core count, other work shared the machine and timings are noisier.
+    pub load_start: Option<f64>,
+    pub load_end: Option<f64>,
+}
+
+/// The 1-minute load average, where the system says.
+pub fn load_average() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
 }
 
 impl Machine {
@@ -236,6 +250,8 @@ impl Machine {
             os,
             date: utc_now(),
             release: !cfg!(debug_assertions),
+            load_start: load_average(),
+            load_end: None,
         }
     }
 }
@@ -582,6 +598,7 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
         pb.inc(1);
     }
     pb.finish_and_clear();
+    res.machine.load_end = load_average();
     res.wall_s = start.elapsed().as_secs_f64();
     Ok(res)
 }

@@ -276,7 +276,7 @@ fn sweep(res: &EvalResults, knob: &str, path: &Path) -> Result<bool, EvalError> 
         (right, 2usize, "trace, all ray types (linear)"),
     ] {
         let val = |p: &(f64, f64, f64)| if which == 1 { p.1 } else { p.2 };
-        let ymax = lines.values().flatten().map(val).fold(1.0, f64::max) * 1.1;
+        let ymax = lines.values().flatten().map(val).fold(1.0, f64::max) * 1.45;
         let mut chart = ChartBuilder::on(&area)
             .caption(format!("{name} vs {knob}"), ("sans-serif", 16))
             .margin(10)

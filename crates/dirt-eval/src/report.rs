@@ -175,7 +175,15 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
             "debug (timings not meaningful)"
         }
     );
-    let _ = writeln!(s, "| run | {:.0} s wall |\n", res.wall_s);
+    let load = |l: Option<f64>| l.map_or_else(|| "?".to_string(), |l| format!("{l:.1}"));
+    let _ = writeln!(
+        s,
+        "| run | {:.0} s wall; 1-minute load average {} at the start, {} at the end (above {} means other work shared the cores: timings are noisier, ratios within the run still compare like with like only roughly) |\n",
+        res.wall_s,
+        load(m.load_start),
+        load(m.load_end),
+        m.cores
+    );
 
     let _ = writeln!(s, "## What was measured\n");
     let _ = writeln!(s, "- Grid: {}; both traversals (linear, hiz).", res.grid);
@@ -192,7 +200,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "- Error: rays whose closest hit differs from brute force's (the same watertight test, every triangle), counted on the first rays of each type (`compared`). For DIRT any bit of `prim, t, u, v`; for the peers, which use their own triangle tests, `prim` or `t` bits. Exact DIRT settings must show 0: anything else is a defect.",
+        "- Error: rays whose closest hit differs from brute force's (the same watertight test, every triangle), counted on the first rays of each type (`compared`). For DIRT any bit of `prim, t, u, v`; for the peers, which use their own triangle tests, another `prim` or a `t` more than 1e-4 (relative) away. Exact DIRT settings must show 0: anything else is a defect.",
     );
     let _ = writeln!(
         s,
@@ -224,7 +232,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     for p in &peers {
         let _ = write!(
             s,
-            " {p} build ms | {p} Mrays/s | build dirt/{p} | trace dirt/{p} (linear) |"
+            " {p} build ms | {p} Mrays/s | build dirt/{p} | trace dirt/{p} (linear / hiz) |"
         );
     }
     let _ = writeln!(s);
@@ -271,7 +279,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
                 opt(pb),
                 f(mrays(pn, pms)),
                 opt(pb.map(|pb| db / pb)),
-                f(if pms > 0.0 { lin_ms / pms } else { f64::NAN })
+                ratio(lin_ms, pms, hiz_ms)
             );
         }
         let _ = writeln!(s);
@@ -580,6 +588,15 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         "Raw data: [results.json]({prefix}results.json), [builds.csv]({prefix}builds.csv), [traces.csv]({prefix}traces.csv), [dynamic.csv]({prefix}dynamic.csv), [renders.csv]({prefix}renders.csv)."
     );
     s
+}
+
+/// `a / p` and `b / p`, as `x / y`.
+fn ratio(a: f64, p: f64, b: f64) -> String {
+    if p > 0.0 {
+        format!("{} / {}", f(a / p), f(b / p))
+    } else {
+        "–".into()
+    }
 }
 
 fn ray_order(t: &str) -> usize {
