@@ -751,7 +751,10 @@ fn auto_keeps_given_options_and_the_hits() {
         "--buckets",
         "4",
     ]);
-    assert!(err.contains("--auto: resolution"), "{err}");
+    assert!(
+        err.contains("--auto: ") && err.contains(" views, resolution "),
+        "{err}"
+    );
     assert!(err.contains("B = 4,"), "the given B is kept: {err}");
     assert_eq!(
         std::fs::read(&a).expect("read"),
