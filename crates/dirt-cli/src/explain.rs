@@ -204,5 +204,26 @@ pub fn explain(
         scene.lights.len(),
         scene.cameras.len()
     );
+    // The renderer's shading features for this scene.
+    for mode in [dirt_render::Mode::Pt, dirt_render::Mode::Ao] {
+        let settings = dirt_render::Settings {
+            mode,
+            ..Default::default()
+        };
+        let _ = writeln!(
+            o,
+            "dirt render --mode {}:",
+            format!("{mode:?}").to_lowercase()
+        );
+        for f in dirt_render::features(scene, &settings) {
+            let _ = writeln!(
+                o,
+                "  {:<8} {}: {}",
+                if f.used { "runs" } else { "left out" },
+                f.name,
+                f.why
+            );
+        }
+    }
     Ok(out)
 }

@@ -199,6 +199,14 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         tracer.name(),
         build_time.as_secs_f64() * 1e3
     );
+    let left_out: Vec<String> = dirt_render::features(&scene, &settings)
+        .into_iter()
+        .filter(|f| !f.used)
+        .map(|f| format!("{} ({})", f.name, f.why))
+        .collect();
+    if !left_out.is_empty() {
+        eprintln!("left out: {}", left_out.join("; "));
+    }
 
     let target = if std::io::stderr().is_terminal() {
         ProgressDrawTarget::stderr()

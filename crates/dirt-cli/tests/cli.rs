@@ -730,6 +730,13 @@ fn explain_says_what_is_left_out_and_what_it_saves() {
         "{out}"
     );
     assert!(out.contains("resolution 32 (given)"), "{out}");
+    // The renderer's features: cornell has an emitter and no textures.
+    assert!(out.contains("runs     area-light sampling"), "{out}");
+    assert!(out.contains("left out base-colour textures"), "{out}");
+    assert!(
+        out.contains("left out material fetch: ambient occlusion"),
+        "{out}"
+    );
 }
 
 #[test]

@@ -89,25 +89,75 @@ impl LinearTexture {
 }
 
 /// The scene data `fetch` reads.
+///
+/// Only what the render uses is prepared: textures are decoded only when a
+/// material some triangle uses refers to them, and a geometry-only fetcher
+/// (ambient occlusion needs positions and normals, 004 §4.1) decodes none
+/// and reads no material.
 #[derive(Debug)]
 pub struct Fetcher<'s> {
     pub scene: &'s Scene,
-    pub textures: Vec<LinearTexture>,
+    /// Indexed like `scene.textures`; `None` where the texture is not decoded.
+    pub textures: Vec<Option<LinearTexture>>,
+    /// Positions and normals only: no texture coordinates, materials or textures.
+    pub geometry_only: bool,
+}
+
+/// Which textures the materials of the scene's triangles refer to.
+pub fn used_textures(scene: &Scene) -> Vec<bool> {
+    let mut used_material = vec![false; scene.materials.len()];
+    for &m in &scene.tri_material {
+        if let Some(u) = used_material.get_mut(m as usize) {
+            *u = true;
+        }
+    }
+    let mut used = vec![false; scene.textures.len()];
+    for (m, _) in scene
+        .materials
+        .iter()
+        .zip(&used_material)
+        .filter(|(_, u)| **u)
+    {
+        if let Some(u) = m.base_color_texture.and_then(|t| used.get_mut(t as usize)) {
+            *u = true;
+        }
+    }
+    used
 }
 
 impl<'s> Fetcher<'s> {
+    /// Everything shading reads, with the textures the scene's triangles use.
     pub fn new(scene: &'s Scene) -> Self {
+        let used = used_textures(scene);
         Self {
             scene,
             textures: scene
                 .textures
                 .iter()
-                .map(LinearTexture::from_srgb)
+                .zip(used)
+                .map(|(t, u)| u.then(|| LinearTexture::from_srgb(t)))
                 .collect(),
+            geometry_only: false,
         }
     }
 
-    /// The surface point of `hit` on `ray`, or `None` for a miss.
+    /// Positions and normals only (no textures decoded, no material read).
+    pub fn geometry(scene: &'s Scene) -> Self {
+        Self {
+            scene,
+            textures: Vec::new(),
+            geometry_only: true,
+        }
+    }
+
+    /// Textures decoded.
+    pub fn decoded_textures(&self) -> usize {
+        self.textures.iter().filter(|t| t.is_some()).count()
+    }
+
+    /// The surface point of `hit` on `ray`, or `None` for a miss. A
+    /// geometry-only fetcher leaves the material fields at the default
+    /// material's values and `uv` at zero.
     pub fn fetch(&self, ray: &Ray, hit: &Hit) -> Option<SurfacePoint> {
         if !hit.is_hit() {
             return None;
@@ -138,6 +188,21 @@ impl<'s> Fetcher<'s> {
         if ns.dot(ng) < 0.0 {
             ns = -ns;
         }
+        if self.geometry_only {
+            let m = dirt_scene::Material::default();
+            return Some(SurfacePoint {
+                prim: hit.prim,
+                p,
+                ng,
+                ns,
+                front,
+                uv: Vec2::ZERO,
+                base: Vec3::new(m.base_color[0], m.base_color[1], m.base_color[2]),
+                metallic: m.metallic,
+                roughness: m.roughness,
+                emission: Vec3::ZERO,
+            });
+        }
         let uv = match &s.tri_uvs {
             Some(uvs) => {
                 let t = uvs[prim];
@@ -148,7 +213,7 @@ impl<'s> Fetcher<'s> {
         let m = s.material_of(prim)?;
         let mut base = Vec3::new(m.base_color[0], m.base_color[1], m.base_color[2]);
         if let Some(t) = m.base_color_texture
-            && let Some(tex) = self.textures.get(t as usize)
+            && let Some(Some(tex)) = self.textures.get(t as usize)
         {
             base *= tex.sample(uv).truncate();
         }

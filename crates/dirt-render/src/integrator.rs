@@ -113,7 +113,11 @@ impl<'s> Renderer<'s> {
             scene,
             settings,
             camera,
-            fetcher: Fetcher::new(scene),
+            fetcher: if settings.mode == Mode::Ao {
+                Fetcher::geometry(scene)
+            } else {
+                Fetcher::new(scene)
+            },
             lights,
             environment,
             offset,

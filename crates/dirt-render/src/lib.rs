@@ -21,6 +21,11 @@
 //!   at G(k), Russian roulette.
 //! * [`shift`]: the left shift G(k-1) ← G(k) ← G(k+1).
 //!
+//! A render runs only the shading features its scene and mode need (no
+//! texture decoding without used textures, no light sampling or shadow rays
+//! without lights, a geometry-only fetch for ambient occlusion); [`features`]
+//! says which and why.
+//!
 //! Shading runs on the host with the same code for every tracer, and random
 //! numbers are a pure function of (seed, pixel, sample, bounce, dimension)
 //! ([`rng`]); pixels accumulate their samples in sample order. So two tracers
@@ -30,6 +35,7 @@
 pub mod bsdf;
 pub mod camera;
 pub mod direct_visibility;
+pub mod features;
 pub mod fetch;
 pub mod integrator;
 pub mod lights;
@@ -43,6 +49,7 @@ pub mod shift;
 pub mod trace;
 
 pub use camera::Camera;
+pub use features::{Feature, features};
 pub use integrator::{Progress, Rendered, Renderer};
 pub use output::Image;
 pub use trace::Tracer;
