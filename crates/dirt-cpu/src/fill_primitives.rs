@@ -92,11 +92,12 @@ pub fn fill_primitives(
         acc += c.load(Ordering::Relaxed);
     }
     offsets.push(acc);
-    // Fill through atomic cursors.
-    let cursors: Vec<AtomicU32> = offsets[..n_lists]
-        .iter()
-        .map(|&o| AtomicU32::new(o))
-        .collect();
+    // Fill through atomic cursors: the counters become the cursors (one
+    // transient u32 per list, not two).
+    let cursors = counts;
+    for (c, &o) in cursors.iter().zip(&offsets) {
+        c.store(o, Ordering::Relaxed);
+    }
     let ids: Vec<AtomicU32> = (0..acc).map(|_| AtomicU32::new(u32::MAX)).collect();
     tris.par_iter().enumerate().for_each(|(id, t)| {
         for_each_list(views, depth, buckets, t, |k| {
@@ -107,11 +108,15 @@ pub fn fill_primitives(
     let mut ids: Vec<u32> = ids.into_iter().map(AtomicU32::into_inner).collect();
     // Every slot was written exactly once (the counts and the fill walk the same pairs).
     debug_assert!(ids.iter().all(|&x| x != u32::MAX));
-    let mut slices: Vec<&mut [u32]> = Vec::with_capacity(n_lists);
+    // Only lists of two or more ids need sorting (most hold zero or one);
+    // collecting just those keeps this index small.
+    let mut slices: Vec<&mut [u32]> = Vec::new();
     let mut rest = ids.as_mut_slice();
     for w in offsets.windows(2) {
         let (head, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
-        slices.push(head);
+        if head.len() > 1 {
+            slices.push(head);
+        }
         rest = tail;
     }
     slices.par_iter_mut().for_each(|s| s.sort_unstable());
