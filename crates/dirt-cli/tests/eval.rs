@@ -58,6 +58,7 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         "renders.csv",
         "renders.svg",
         "render_reference.png",
+        "leave_out.csv",
     ] {
         let p = dir.join(f);
         assert!(
@@ -116,9 +117,27 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
     assert!(renders[1..].iter().all(|r| &r[same] == "true"));
     let builds = csv_rows(&dir.join("builds.csv"));
     assert!(builds.len() > 10);
+    // Leaving out against everything on: every configuration, the same hits.
+    let lo = csv_rows(&dir.join("leave_out.csv"));
+    let (config, ldiff, lcmp) = (
+        column(&lo, "config"),
+        column(&lo, "differ"),
+        column(&lo, "compared"),
+    );
+    for c in ["all views", "leave out", "cost model"] {
+        assert!(lo[1..].iter().any(|r| &r[config] == c), "no {c} row");
+    }
+    for r in &lo[1..] {
+        assert_eq!(&r[ldiff], "0", "leaving out changed a hit: {r:?}");
+        assert!(r[lcmp].parse::<usize>().expect("compared") > 0);
+    }
 
     let md = fs::read_to_string(&report).expect("report");
     assert!(md.contains("**DIRT: 0 rays differ**"), "{md}");
+    assert!(
+        md.contains("## Leaving out what a scene does not need"),
+        "{md}"
+    );
     assert!(md.contains("(results/") || md.contains("pareto_cornell.svg"));
     let _ = fs::remove_dir_all(&dir);
 }

@@ -341,6 +341,8 @@ pub struct EvalResults {
     pub builds: Vec<BuildRow>,
     pub traces: Vec<TraceRow>,
     pub dynamic: Vec<DynamicRow>,
+    /// Time and memory saved by leaving out what a scene does not need.
+    pub leave_out: Vec<crate::leave_out::LeaveOutRow>,
     pub renders: Vec<RenderRow>,
     pub render_reference: Option<RenderReference>,
     pub render_settings_bounces: u32,
@@ -487,7 +489,7 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
             None
         }
     };
-    let per_scene = cfg.grid.len() + cfg.peers.len() + usize::from(gpu.is_some()) + 1;
+    let per_scene = cfg.grid.len() + cfg.peers.len() + usize::from(gpu.is_some()) + 2;
     let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames) + usize::from(cfg.render.is_some());
     let pb = progress_bar(
         (cfg.scenes.len() * per_scene + dyn_steps) as u64,
@@ -558,6 +560,27 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
             measure_cpu(&prep, &point, cfg, &mut res)?;
             pb.inc(1);
         }
+        pb.set_message(format!("{label}: leaving out against everything on"));
+        let all_rays: Vec<Ray> = prep
+            .rays
+            .iter()
+            .flat_map(|(_, r)| r.iter().copied())
+            .collect();
+        let input = crate::leave_out::Input {
+            scene: &prep.name,
+            tris: &prep.tris,
+            rays: &all_rays,
+            compared: prep
+                .rays
+                .iter()
+                .zip(&prep.truth)
+                .map(|((_, r), t)| (&r[..t.len()], t.as_slice()))
+                .collect(),
+            camera: prep.camera_eye,
+            repeat: cfg.repeat,
+        };
+        res.leave_out.extend(crate::leave_out::run(&input)?);
+        pb.inc(1);
         for peer in &cfg.peers {
             pb.set_message(format!("{label}: {}", peer.name()));
             match measure_peer(&prep, *peer, threads, cfg, &mut res) {

@@ -22,6 +22,7 @@
 
 pub mod dynamic;
 pub mod harness;
+pub mod leave_out;
 pub mod peers;
 pub mod plot;
 pub mod rays;

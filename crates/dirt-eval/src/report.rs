@@ -63,6 +63,10 @@ pub fn write_all(
             "renders.csv",
             write_csv(&dir.join("renders.csv"), &res.renders),
         ),
+        (
+            "leave_out.csv",
+            write_csv(&dir.join("leave_out.csv"), &res.leave_out),
+        ),
     ];
     for (name, written) in csvs {
         written?;
@@ -412,6 +416,59 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         );
     }
     let _ = writeln!(s);
+
+    if !res.leave_out.is_empty() {
+        let _ = writeln!(s, "## Leaving out what a scene does not need\n");
+        let _ = writeln!(
+            s,
+            "Against the everything-on configuration (every view the bounds reach, `Ads::build_all_views`), per scene: `leave out` builds only the views some triangle reaches (`Ads::build`), with the cube at the bounds centre and at the scene camera; `cost model` is the candidate `dirt_cpu::cost` ranks cheapest for a frame of all the run's rays (what `--auto` builds). Trace: every ray of the run, Hi-Z, median of {} runs. `differ`: compared rays whose hit differs from brute force in any bit (must be 0).\n",
+            res.repeat
+        );
+        let _ = writeln!(
+            s,
+            "| scene | centre | config | views | res | B | views built | build ms | trace ms | MiB | build saved | trace saved | memory saved | differ / compared |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        );
+        for r in &res.leave_out {
+            let base = res.leave_out.iter().find(|b| {
+                b.scene == r.scene
+                    && b.config == "all views"
+                    && (b.centre == r.centre
+                        || r.config == "cost model" && b.centre == "bounds centre")
+            });
+            let pct = |x: f64, base: f64| {
+                let v = (100.0 * (1.0 - x / base)).round();
+                format!("{} %", if v == 0.0 { 0.0 } else { v })
+            };
+            let (bs, ts, ms_) = base.map_or((String::new(), String::new(), String::new()), |b| {
+                (
+                    pct(r.build_ms, b.build_ms),
+                    pct(r.trace_ms, b.trace_ms),
+                    pct(r.bytes as f64, b.bytes as f64),
+                )
+            });
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {}{} / {} |",
+                r.scene,
+                r.centre,
+                r.config,
+                r.views,
+                r.resolution,
+                r.buckets,
+                r.views_built,
+                f(r.build_ms),
+                f(r.trace_ms),
+                mib(r.bytes as f64),
+                bs,
+                ts,
+                ms_,
+                if r.differ > 0 { "**" } else { "" },
+                r.differ,
+                r.compared
+            );
+        }
+        let _ = writeln!(s);
+    }
 
     if let Some(rr) = &res.render_reference {
         let _ = writeln!(s, "## Renders: image error against time\n");

@@ -1,0 +1,167 @@
+//! Time and memory saved by leaving out what a scene does not need, against
+//! the everything-on configuration, with the hits of every configuration
+//! compared with brute force (they must not change).
+//!
+//! Configurations per scene, all with the default B, S and resolution unless
+//! said otherwise:
+//! * `all views` / `leave out`: `Ads::build_all_views` against `Ads::build`
+//!   (views no triangle reaches get no passes and no memory), with the cube
+//!   centred on the bounds (the default) and on the scene camera (the
+//!   papers' placement, where whole faces can be empty);
+//! * `cost model`: the candidate `dirt_cpu::cost::choose` ranks cheapest for
+//!   a frame of every ray of the run (what `--auto` builds), leaving out too.
+
+use std::time::Instant;
+
+use dirt_cpu::cost::{CostModel, candidates, choose};
+use dirt_cpu::{Ads, AdsParams, Traversal, trace};
+use dirt_math::{Hit, Ray, Triangle, Vec3};
+use serde::Serialize;
+
+use crate::EvalError;
+use crate::harness::{median, ms};
+
+/// One configuration of one scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct LeaveOutRow {
+    pub scene: String,
+    /// `bounds centre` or `camera`.
+    pub centre: String,
+    /// `all views`, `leave out`, `cost model`.
+    pub config: String,
+    pub views: String,
+    pub resolution: u32,
+    pub buckets: u32,
+    pub views_built: usize,
+    pub build_ms: f64,
+    /// Median wall time of tracing every ray of the run (Hi-Z).
+    pub trace_ms: f64,
+    pub rays: usize,
+    pub bytes: u64,
+    /// Rays of the compared prefixes whose hit differs from brute force in any bit.
+    pub differ: usize,
+    pub compared: usize,
+}
+
+/// Rays and ground truth of one scene, as the harness prepared them.
+#[derive(Debug)]
+pub struct Input<'a> {
+    pub scene: &'a str,
+    pub tris: &'a [Triangle],
+    /// Every ray of the run, all types.
+    pub rays: &'a [Ray],
+    /// Prefixes compared with brute force: (rays, truth).
+    pub compared: Vec<(&'a [Ray], &'a [Hit])>,
+    pub camera: Option<Vec3>,
+    pub repeat: u32,
+}
+
+fn measure(
+    input: &Input<'_>,
+    centre: &str,
+    config: &str,
+    params: &AdsParams,
+    all_views: bool,
+) -> Result<LeaveOutRow, EvalError> {
+    let build_err = |source| EvalError::Build {
+        scene: input.scene.to_string(),
+        source,
+    };
+    let mut build_times = Vec::new();
+    let mut built = None;
+    for _ in 0..input.repeat.max(1) {
+        let t = Instant::now();
+        let ads = if all_views {
+            Ads::build_all_views(input.tris, params)
+        } else {
+            Ads::build(input.tris, params)
+        }
+        .map_err(build_err)?;
+        build_times.push(ms(t.elapsed()));
+        built = Some(ads);
+    }
+    let Some(ads) = built else {
+        return Err(EvalError::Config("repeat must be at least 1".into()));
+    };
+    let mut trace_times = Vec::new();
+    for _ in 0..input.repeat.max(1) {
+        let t = Instant::now();
+        std::hint::black_box(trace(&ads, input.tris, input.rays, Traversal::HiZ));
+        trace_times.push(ms(t.elapsed()));
+    }
+    let mut differ = 0;
+    let mut compared = 0;
+    for (rays, truth) in &input.compared {
+        let hits = trace(&ads, input.tris, rays, Traversal::HiZ);
+        differ += hits
+            .iter()
+            .zip(truth.iter())
+            .filter(|(h, g)| h.bits() != g.bits())
+            .count();
+        compared += truth.len();
+    }
+    Ok(LeaveOutRow {
+        scene: input.scene.to_string(),
+        centre: centre.to_string(),
+        config: config.to_string(),
+        views: format!("{:?}", params.views).to_lowercase(),
+        resolution: params.resolution,
+        buckets: params.buckets,
+        views_built: ads.views.slots(),
+        build_ms: median(build_times),
+        trace_ms: median(trace_times),
+        rays: input.rays.len(),
+        bytes: ads.memory().total(),
+        differ,
+        compared,
+    })
+}
+
+/// Every configuration of the module docs for one scene.
+pub fn run(input: &Input<'_>) -> Result<Vec<LeaveOutRow>, EvalError> {
+    let mut rows = Vec::new();
+    let mut centres = vec![("bounds centre", AdsParams::default())];
+    if let Some(eye) = input.camera {
+        centres.push((
+            "camera",
+            AdsParams {
+                center: Some(eye),
+                ..AdsParams::default()
+            },
+        ));
+    }
+    for (centre, params) in &centres {
+        rows.push(measure(input, centre, "all views", params, true)?);
+        rows.push(measure(input, centre, "leave out", params, false)?);
+    }
+    // The cost model ranks on a sample, for a frame of every ray of the run.
+    let sample: Vec<Ray> = input
+        .rays
+        .iter()
+        .step_by((input.rays.len() / 2000).max(1))
+        .copied()
+        .collect();
+    let base = AdsParams::default();
+    let ranked = choose(
+        input.tris,
+        &sample,
+        input.rays.len() as u64,
+        Traversal::HiZ,
+        &CostModel::CALIBRATED,
+        &candidates(&base, true),
+    )
+    .map_err(|source| EvalError::Build {
+        scene: input.scene.to_string(),
+        source,
+    })?;
+    if let Some(best) = ranked.first() {
+        rows.push(measure(
+            input,
+            "bounds centre",
+            "cost model",
+            &best.params,
+            false,
+        )?);
+    }
+    Ok(rows)
+}
