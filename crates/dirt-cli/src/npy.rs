@@ -249,6 +249,15 @@ fn read_header(reader: &mut impl Read, path: &Path) -> Result<NpyHeader, CliErro
     reader
         .read_exact(&mut prefix[start..])
         .map_err(|_| not_npy("the header is cut off".into()))?;
+    // npyz's parser of the dictionary takes time exponential in the nesting
+    // of brackets (found by fuzzing: 100 nested braces ran for minutes). A
+    // valid header is one dictionary; structured dtypes nest a few levels.
+    let depth = nesting_depth(&prefix[start..]);
+    if depth > MAX_HEADER_NESTING {
+        return Err(not_npy(format!(
+            "the header dictionary nests brackets {depth} deep (at most {MAX_HEADER_NESTING})"
+        )));
+    }
     if let Some(dims) = shape_in(&prefix[start..])
         && dims
             .iter()
@@ -262,6 +271,26 @@ fn read_header(reader: &mut impl Read, path: &Path) -> Result<NpyHeader, CliErro
         )));
     }
     NpyHeader::from_reader(&prefix[..]).map_err(|e| not_npy(e.to_string()))
+}
+
+/// Deepest header nesting accepted: `{[(('name', '<f4'), (2,))]}` is 4.
+const MAX_HEADER_NESTING: usize = 6;
+
+/// Deepest nesting of `{`, `[` and `(` in `dict` (quotes are not special:
+/// counting brackets inside names only makes the check stricter).
+fn nesting_depth(dict: &[u8]) -> usize {
+    let (mut depth, mut max) = (0usize, 0usize);
+    for &c in dict {
+        match c {
+            b'{' | b'[' | b'(' => {
+                depth += 1;
+                max = max.max(depth);
+            }
+            b'}' | b']' | b')' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    max
 }
 
 /// The dimensions of the `'shape'` tuple of a header dictionary, when it is
@@ -618,6 +647,32 @@ mod tests {
         let bytes = raw_npy("<f4", &[1 << 40, 1 << 40, 8], false, &[]);
         let e = read(&bytes).expect_err("refused").to_string();
         assert!(e.contains("more elements than a 64-bit count holds"), "{e}");
+    }
+
+    /// Found by `cargo fuzz run npy_rays` (a timeout): npyz's header parser
+    /// ran for minutes on 98 nested braces. This rebuilds that input.
+    #[test]
+    fn deeply_nested_header_is_refused_at_once() {
+        let mut dict = "{".repeat(98).into_bytes();
+        dict.extend_from_slice(b"'descr': '>f4', 'fortran_order': False,              2");
+        dict.resize(0xd5 - 12, b' ');
+        dict.push(b'\n');
+        let mut bytes = b"\x93NUMPY\x02\x00".to_vec();
+        bytes.extend_from_slice(&(dict.len() as u32).to_le_bytes());
+        bytes.extend_from_slice(&dict);
+        bytes.extend_from_slice(&[
+            0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xbf, 0x80, 0, 0, 0x7f, 0x80, 0, 0,
+        ]);
+        let e = read(&bytes).expect_err("refused").to_string();
+        assert!(e.contains("nests brackets 98 deep"), "{e}");
+        // A structured dtype's usual nesting still reaches the dtype check.
+        let bytes = raw_npy("[('x', '<f4', (8,))]", &[1], false, &[0; 32]);
+        assert!(
+            !read(&bytes)
+                .expect_err("structured")
+                .to_string()
+                .contains("nests")
+        );
     }
 
     #[test]
