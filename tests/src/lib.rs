@@ -1,7 +1,8 @@
 //! Shared helpers of the cross-crate tests: adversarial ray sets and the
 //! exactness check against brute force.
 
-use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind, brute_force, trace};
+use dirt_core::{AdsParams, Traversal, ViewsKind};
+use dirt_cpu::{Ads, brute_force, trace};
 use dirt_math::{Aabb, Hit, Ray, Triangle, Vec3};
 
 /// A small deterministic generator (PCG-style LCG), so every test is reproducible.
@@ -428,7 +429,7 @@ pub fn gpu_differences(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> O
         }
     }
     let lists = ads.read_lists(g).expect("read lists");
-    let sorted = |l: &dirt_cpu::IdLists| -> Vec<Vec<u32>> {
+    let sorted = |l: &dirt_core::IdLists| -> Vec<Vec<u32>> {
         l.offsets
             .windows(2)
             .map(|w| {

@@ -30,7 +30,8 @@ fn many_layers_under_one_pixel() {
 /// brute-force closest hit among the points the view sees.
 #[test]
 fn single_view_inside_the_scene_reports_what_it_sees() {
-    use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind, brute_force, trace};
+    use dirt_core::{AdsParams, Traversal, ViewsKind};
+    use dirt_cpu::{Ads, brute_force, trace};
     use dirt_math::triangle::{RayShear, intersect};
 
     let mut tris: Vec<Triangle> = uv_sphere(Vec3::ZERO, 1.0, 12, 16);

@@ -1,7 +1,8 @@
 //! GPU == CPU, bit for bit, on lavapipe: depth bounds, Hi-Z levels, id lists
 //! (as sets per list), hits and per-ray statistics, on random scenes and rays.
 
-use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind, trace_with_stats};
+use dirt_core::{AdsParams, Traversal, ViewsKind};
+use dirt_cpu::{Ads, trace_with_stats};
 use dirt_gpu::GpuAds;
 use dirt_math::{Ray, Triangle, Vec3};
 use dirt_tests::{Rng, adversarial_rays, gpu};
@@ -23,7 +24,7 @@ fn random_scene(seed: u64, n: usize, scale: f32) -> Vec<Triangle> {
 }
 
 /// Every list as a sorted set.
-fn sorted_lists(l: &dirt_cpu::IdLists) -> Vec<Vec<u32>> {
+fn sorted_lists(l: &dirt_core::IdLists) -> Vec<Vec<u32>> {
     l.offsets
         .windows(2)
         .map(|w| {

@@ -106,18 +106,18 @@ fn view_clip_and_walk_setup_equal_cpu() {
         let scene = dirt_scene::builtin(name).expect("built-in");
         let rays = adversarial_rays(&scene.triangles, 60, 17 + si as u64);
         for params in [
-            dirt_cpu::AdsParams {
+            dirt_core::AdsParams {
                 resolution: 64,
                 tile: 2,
                 ..Default::default()
             },
-            dirt_cpu::AdsParams {
-                views: dirt_cpu::ViewsKind::Single,
+            dirt_core::AdsParams {
+                views: dirt_core::ViewsKind::Single,
                 resolution: 32,
                 ..Default::default()
             },
         ] {
-            let vs = dirt_cpu::views_for(&scene.triangles, &params).expect("views");
+            let vs = dirt_core::views_for(&scene.triangles, &params).expect("views");
             let mut input = Vec::new();
             let mut cases = Vec::new();
             for (k, v) in vs.views.iter().enumerate() {

@@ -1,7 +1,8 @@
 //! Views no triangle reaches are left out of the structure (no passes, no
 //! memory) and that changes no hit, on either backend.
 
-use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind, brute_force, trace_with_stats};
+use dirt_core::{AdsParams, Traversal, ViewsKind};
+use dirt_cpu::{Ads, brute_force, trace_with_stats};
 use dirt_math::{Triangle, Vec3};
 use dirt_tests::{adversarial_rays, gpu, grid, uv_sphere};
 
@@ -112,7 +113,7 @@ fn an_empty_scene_stores_nothing_and_misses() {
 
 #[test]
 fn left_out_views_say_why() {
-    use dirt_cpu::{LeftOutReason, left_out_views};
+    use dirt_core::{LeftOutReason, left_out_views};
     let (tris, params) = lopsided();
     let left = left_out_views(&tris, &params).expect("views");
     let names: Vec<&str> = left.iter().map(|l| l.name).collect();

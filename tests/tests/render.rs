@@ -3,11 +3,12 @@
 //! same render traced on the CPU, hit for hit on every bounce and bit for bit
 //! in every pixel (shading runs on the host for both, with the same code).
 
-use dirt_cpu::{AdsParams, Traversal};
-use dirt_gpu::GpuAds;
+use dirt_core::{AdsParams, Tracer, Traversal};
+use dirt_cpu::DirtCpu;
+use dirt_gpu::{DirtGpu, GpuAds};
 use dirt_math::{Triangle, Vec3};
 use dirt_render::reference::Reference;
-use dirt_render::trace::{DirtCpu, DirtGpu, Recording, Tracer};
+use dirt_render::trace::Recording;
 use dirt_render::{Camera, Mode, Renderer, Settings};
 use dirt_tests::{Rng, adversarial_rays, gpu};
 
@@ -52,7 +53,7 @@ fn reference_equals_brute_force_on_adversarial_rays() {
     scenes.push(("far soup".into(), far));
     for (name, tris) in &scenes {
         let rays = adversarial_rays(tris, 300, 11);
-        let reference = Reference::build(tris).trace(&rays);
+        let reference = Reference::new(tris).trace(&rays).expect("reference trace");
         let truth = dirt_cpu::brute_force::trace(tris, &rays);
         let bad: Vec<usize> = (0..rays.len())
             .filter(|&i| reference[i].bits() != truth[i].bits())
@@ -88,7 +89,7 @@ fn gpu_render_equals_cpu_render_hit_for_hit_and_bit_for_bit() {
     let renderer = Renderer::new(&scene, camera, s).expect("renderer");
     let params = AdsParams::default();
     let mut cpu = Recording::new(
-        DirtCpu::build(&scene.triangles, &params, Traversal::Linear).expect("cpu build"),
+        DirtCpu::built(&scene.triangles, &params, Traversal::Linear).expect("cpu build"),
     );
     let gpu_ads = GpuAds::build(g, &scene.triangles, &params).expect("gpu build");
     let mut gpu_tracer = Recording::new(DirtGpu::from_ads(g, gpu_ads, Traversal::Linear));

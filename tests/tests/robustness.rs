@@ -6,7 +6,8 @@
 //! (`robust_matrix`); a representative subset also asserts GPU == CPU on
 //! lavapipe (skipped without an adapter unless `DIRT_REQUIRE_GPU=1`).
 
-use dirt_cpu::{Ads, AdsParams, CpuError, Traversal, ViewsKind, brute_force, trace};
+use dirt_core::{AdsParams, CoreError, Traversal, ViewsKind};
+use dirt_cpu::{Ads, CpuError, brute_force, trace};
 use dirt_math::{Aabb, Hit, Ray, RayProblem, Triangle, Vec3};
 use dirt_tests::{
     Mesh, Rng, adversarial_rays, assert_exact, assert_gpu_equals_cpu, box_mesh, gpu,
@@ -1022,11 +1023,13 @@ fn nan_and_inf_vertices_are_refused() {
         tris[index].v[rng.below(3)][rng.below(3)] = bad;
         for p in robust_matrix(16, None) {
             match Ads::build(&tris, &p) {
-                Err(CpuError::NonFiniteTriangle { index: i }) => assert_eq!(i, index),
+                Err(CpuError::Core(CoreError::NonFiniteTriangle { index: i })) => {
+                    assert_eq!(i, index)
+                }
                 other => panic!("expected NonFiniteTriangle, got {other:?}"),
             }
         }
-        let msg = CpuError::NonFiniteTriangle { index }.to_string();
+        let msg = CpuError::from(CoreError::NonFiniteTriangle { index }).to_string();
         assert!(
             msg.contains(&index.to_string()) && msg.contains("non-finite"),
             "{msg}"
@@ -1049,7 +1052,7 @@ fn nan_and_inf_vertices_are_refused() {
         assert!(hits.iter().all(|h| h.prim != index as u32), "{bad}");
         if let Some(g) = gpu() {
             match dirt_gpu::GpuAds::build(g, &tris, &AdsParams::default()) {
-                Err(dirt_gpu::GpuError::Params(CpuError::NonFiniteTriangle { index: i })) => {
+                Err(dirt_gpu::GpuError::Params(CoreError::NonFiniteTriangle { index: i })) => {
                     assert_eq!(i, index)
                 }
                 other => panic!("expected NonFiniteTriangle, got {other:?}"),
@@ -1349,7 +1352,7 @@ fn renderer_refuses_bad_cameras_and_scenes() {
 /// primary ray misses, no pixel is NaN, on DIRT and brute force alike.
 #[test]
 fn renderer_on_a_scene_of_only_degenerate_triangles() {
-    use dirt_render::{Camera, Renderer, Settings, trace};
+    use dirt_render::{Camera, Renderer, Settings};
     let mut rng = Rng(32);
     let tris = degenerates(&mut rng, 60);
     let scene = dirt_scene::Scene {
@@ -1366,11 +1369,15 @@ fn renderer_on_a_scene_of_only_degenerate_triangles() {
         ..Settings::default()
     };
     let r = Renderer::new(&scene, camera, settings).expect("renderer");
-    let mut dirt = trace::DirtCpu::build(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
-        .expect("build");
+    let mut dirt =
+        dirt_cpu::DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
+            .expect("build");
     let a = r.render(&mut dirt, &mut |_| {}).expect("render");
     let b = r
-        .render(&mut trace::Brute::new(&scene.triangles), &mut |_| {})
+        .render(
+            &mut dirt_cpu::brute_force::Brute::new(&scene.triangles),
+            &mut |_| {},
+        )
         .expect("render");
     assert_eq!(a.image.pixels, b.image.pixels);
     let first = a.image.pixels[0];

@@ -13,7 +13,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use dirt_cpu::{Ads, Traversal};
+use dirt_core::Traversal;
+use dirt_cpu::Ads;
 use dirt_gpu::{Gpu, GpuAds};
 use dirt_math::{Hit, Ray, RayStats, Triangle};
 
@@ -368,7 +369,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
 fn bench_gpu(
     gpu: &Gpu,
     tris: &[Triangle],
-    params: &dirt_cpu::AdsParams,
+    params: &dirt_core::AdsParams,
     rays: &[Ray],
     k: u32,
     cpu_results: &[Option<Traced>],
@@ -839,7 +840,7 @@ mod tests {
         );
         assert_eq!(b.kind, RayKind::Mixed);
         assert_eq!(b.backends, [Backend::Cpu, Backend::Gpu, Backend::Brute]);
-        assert_eq!(b.ads.params(), dirt_cpu::AdsParams::default());
+        assert_eq!(b.ads.params(), dirt_core::AdsParams::default());
         assert!(b.json.is_none());
         let b = parse(&[
             "dirt",

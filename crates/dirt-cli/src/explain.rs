@@ -4,8 +4,9 @@
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
+use dirt_core::{AdsParams, LeftOutReason, Traversal, ViewsKind, left_out_views};
+use dirt_cpu::Ads;
 use dirt_cpu::cost::{CostModel, candidates, choose};
-use dirt_cpu::{Ads, AdsParams, LeftOutReason, Traversal, ViewsKind, left_out_views};
 use dirt_scene::Scene;
 
 use crate::raygen::{self, RayKind};

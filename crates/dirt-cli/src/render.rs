@@ -6,10 +6,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use dirt_cpu::Traversal;
+use dirt_core::{Tracer, Traversal};
+use dirt_cpu::{DirtCpu, brute_force::Brute};
+use dirt_gpu::DirtGpu;
 use dirt_math::Vec3;
 use dirt_render::reference::Reference;
-use dirt_render::trace::{Brute, DirtCpu, DirtGpu, Tracer};
 use dirt_render::{Camera, Mode, Renderer, Settings};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -176,14 +177,14 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let build = std::time::Instant::now();
     let mut tracer: Box<dyn Tracer + '_> = match (args.backend, &gpu) {
         (RenderBackend::Auto | RenderBackend::Gpu, Some(g)) => Box::new(
-            DirtGpu::build(g, tris, &params, traversal)
+            DirtGpu::built(g, tris, &params, traversal)
                 .with_context(|| format!("cannot build DIRT on the GPU ({params:?})"))?,
         ),
         (RenderBackend::Auto | RenderBackend::Gpu | RenderBackend::Cpu, _) => Box::new(
-            DirtCpu::build(tris, &params, traversal)
+            DirtCpu::built(tris, &params, traversal)
                 .with_context(|| format!("cannot build DIRT ({params:?})"))?,
         ),
-        (RenderBackend::Reference, _) => Box::new(Reference::build(tris)),
+        (RenderBackend::Reference, _) => Box::new(Reference::new(tris)),
         (RenderBackend::Brute, _) => Box::new(Brute::new(tris)),
     };
     let build_time = build.elapsed();

@@ -4,7 +4,8 @@
 //! over scenes and parameters.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use dirt_cpu::{Ads, AdsParams, Traversal};
+use dirt_core::{AdsParams, Traversal};
+use dirt_cpu::Ads;
 use dirt_math::{Ray, Triangle, Vec3};
 use std::hint::black_box;
 
@@ -73,7 +74,7 @@ fn rays(count: usize) -> Vec<Ray> {
 fn stages(c: &mut Criterion) {
     let tris = scene(48);
     let params = AdsParams::default();
-    let views = dirt_cpu::views_for(&tris, &params).expect("valid parameters");
+    let views = dirt_core::views_for(&tris, &params).expect("valid parameters");
     let depth = dirt_cpu::fill_depth::fill_depth(&views, &tris);
     let mut g = c.benchmark_group("build");
     g.sample_size(10);

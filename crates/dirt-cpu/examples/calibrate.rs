@@ -10,8 +10,9 @@
 //! sphere (a fixed seed), 20 000 per setting; each time is the best of three
 //! (builds over a second: one).
 
+use dirt_core::{AdsParams, Traversal};
 use dirt_cpu::cost::{CostModel, Counts};
-use dirt_cpu::{Ads, AdsParams, Traversal, trace};
+use dirt_cpu::{Ads, trace};
 use dirt_math::{Aabb, Ray, Vec3};
 use std::time::Instant;
 

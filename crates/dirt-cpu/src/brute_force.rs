@@ -1,8 +1,10 @@
 //! Ground truth: every ray against every triangle with the same triangle test
 //! and the same tie-break as `trace`.
 
+use dirt_core::{
+    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, check_lengths,
+};
 use dirt_math::triangle::{RayShear, intersect_closest};
-use dirt_math::{Hit, Ray, Triangle};
 use rayon::prelude::*;
 
 /// Closest hits by testing every triangle. Rays that fail [`Ray::validate`] miss.
@@ -20,4 +22,49 @@ pub fn trace_ray(tris: &[Triangle], ray: &Ray) -> Hit {
         intersect_closest(ray, &sh, t, id as u32, &mut best);
     }
     best
+}
+
+/// Brute force as a [`Tracer`]: the ground truth every other tracer is held to.
+#[derive(Debug, Default)]
+pub struct Brute {
+    tris: Vec<Triangle>,
+}
+
+impl Brute {
+    /// Brute force over `tris` (a copy is kept).
+    pub fn new(tris: &[Triangle]) -> Self {
+        Self {
+            tris: tris.to_vec(),
+        }
+    }
+}
+
+impl Tracer for Brute {
+    fn name(&self) -> String {
+        "brute".to_string()
+    }
+
+    fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
+        self.tris.clear();
+        self.tris.extend_from_slice(tris);
+        Ok(BuildReport {
+            stages: Vec::new(),
+            // It builds nothing: the triangles it keeps are the input, not a structure.
+            memory: Some(0),
+        })
+    }
+
+    fn trace_into(
+        &mut self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stats: Option<&mut [RayStats]>,
+    ) -> Result<TraceReport, CoreError> {
+        check_lengths(rays, hits, stats.as_deref())?;
+        let tris = &self.tris;
+        rays.par_iter()
+            .zip(hits.par_iter_mut())
+            .for_each(|(r, h)| *h = trace_ray(tris, r));
+        Ok(TraceReport::default())
+    }
 }

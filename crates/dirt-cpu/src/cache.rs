@@ -8,7 +8,7 @@
 //! ([`Geometry::Hash`], one pass over them). Both backends use it: the value
 //! is any structure (`Ads`, or `dirt_gpu::GpuAds`).
 
-use crate::AdsParams;
+use dirt_core::AdsParams;
 use dirt_math::Triangle;
 use std::hash::{Hash, Hasher};
 

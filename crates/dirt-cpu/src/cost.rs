@@ -17,7 +17,8 @@
 //! Only the *ranking* of candidates matters for [`choose`]; every candidate
 //! gives the same hits.
 
-use crate::{Ads, AdsParams, CpuError, Traversal, ViewsKind, trace_with_stats};
+use crate::{Ads, CpuError, trace_with_stats};
+use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_math::{Ray, Triangle};
 
 /// Weights of the frame-cost model, in nanoseconds per unit.

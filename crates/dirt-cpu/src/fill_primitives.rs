@@ -9,27 +9,13 @@
 //! arbitrary; the CPU sorts each list afterwards so its structure is reproducible.
 
 use crate::CpuError;
+use dirt_core::IdLists;
 use dirt_math::bucket::bucket_range;
 use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::{Triangle, ViewSet};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
-
-/// The per-bucket primitive lists.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct IdLists {
-    pub offsets: Vec<u32>,
-    pub ids: Vec<u32>,
-}
-
-impl IdLists {
-    #[inline]
-    pub fn list(&self, k: usize) -> &[u32] {
-        let (a, b) = (self.offsets[k] as usize, self.offsets[k + 1] as usize);
-        &self.ids[a..b]
-    }
-}
 
 /// Calls `f(list_index)` for every (tile, bucket) list triangle `t` belongs to.
 fn for_each_list(

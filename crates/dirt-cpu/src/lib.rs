@@ -18,224 +18,38 @@ pub mod fill_depth;
 pub mod fill_primitives;
 pub mod mip_depth;
 pub mod trace;
+pub mod tracer;
 
 pub use cache::{BuildCache, Geometry, Reuse};
-pub use dirt_math::ViewsKind;
-pub use dirt_math::types::RayStats;
-pub use fill_primitives::IdLists;
-pub use trace::{trace, trace_with_stats};
+pub use trace::{trace, trace_into, trace_with_stats};
+pub use tracer::DirtCpu;
 
-use dirt_math::clip::{clip_triangle_to_view, polygon_tile_range};
+use dirt_core::{AdsParams, BuildTimings, CoreError, IdLists, Triangle, views_for, views_for_all};
+use dirt_math::ViewSet;
 use dirt_math::dda::hiz_width;
 use dirt_math::encode::ordered_to_f32;
-use dirt_math::{Aabb, Triangle, Vec3, ViewSet};
 use std::fmt;
 use std::time::{Duration, Instant};
 
-/// How `trace` walks the tiles a ray crosses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Traversal {
-    /// Conservative 2D DDA over the finest tiles.
-    #[default]
-    Linear,
-    /// Hierarchical stepping through the Hi-Z pyramid.
-    HiZ,
-}
-
-/// Build parameters of the acceleration structure.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AdsParams {
-    pub views: ViewsKind,
-    /// Face resolution in pixels (square faces).
-    pub resolution: u32,
-    /// Depth buckets per tile (B).
-    pub buckets: u32,
-    /// Tile size in pixels (S); must divide `resolution`.
-    pub tile: u32,
-    /// Cube: the centre of the views. Single: the eye. `None`: the centre of
-    /// the scene bounds for the cube; outside the bounds, seeing all of them, for the single view.
-    pub center: Option<Vec3>,
-}
-
-impl Default for AdsParams {
-    fn default() -> Self {
-        Self {
-            views: ViewsKind::Cube,
-            resolution: 128,
-            buckets: 8,
-            tile: 1,
-            center: None,
+impl From<CpuError> for CoreError {
+    fn from(e: CpuError) -> Self {
+        match e {
+            CpuError::Core(e) => e,
+            other => CoreError::backend("dirt-cpu", other),
         }
-    }
-}
-
-impl AdsParams {
-    /// Tiles per side of each view.
-    pub fn tiles(&self) -> u32 {
-        self.resolution / self.tile.max(1)
-    }
-
-    /// Checks the parameters before any work is done.
-    pub fn validate(&self) -> Result<(), CpuError> {
-        let bad = |m: String| Err(CpuError::InvalidParams(m));
-        if self.resolution == 0 || self.resolution > 16384 {
-            return bad(format!(
-                "resolution must be in 1..=16384, got {}",
-                self.resolution
-            ));
-        }
-        if self.tile == 0 || !self.resolution.is_multiple_of(self.tile) {
-            return bad(format!(
-                "tile size {} must be >= 1 and divide the resolution {}",
-                self.tile, self.resolution
-            ));
-        }
-        if self.buckets == 0 || self.buckets > 4096 {
-            return bad(format!("buckets must be in 1..=4096, got {}", self.buckets));
-        }
-        if let Some(c) = self.center
-            && !c.is_finite()
-        {
-            return bad(format!("center must be finite, got {c}"));
-        }
-        let lists = 6u64 * (self.tiles() as u64).pow(2) * self.buckets as u64;
-        if lists >= u32::MAX as u64 {
-            return bad(format!(
-                "{lists} lists (views × tiles² × buckets) is more than the structure can index"
-            ));
-        }
-        Ok(())
     }
 }
 
 /// Errors of the CPU backend.
 #[derive(Debug, thiserror::Error)]
 pub enum CpuError {
-    #[error("invalid parameter: {0}")]
-    InvalidParams(String),
-    #[error("triangle {index} has a non-finite vertex coordinate")]
-    NonFiniteTriangle { index: usize },
+    /// Bad parameters or triangles (checked by `dirt_core`).
+    #[error(transparent)]
+    Core(#[from] CoreError),
     #[error(
         "the structure would hold {nodes} list nodes, more than 2^32-1; use fewer buckets or a lower resolution"
     )]
     TooManyNodes { nodes: u64 },
-}
-
-/// Wall time of each build stage.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct BuildTimings {
-    pub fill_depth: Duration,
-    pub mip_depth: Duration,
-    pub fill_primitives: Duration,
-}
-
-impl BuildTimings {
-    pub fn total(&self) -> Duration {
-        self.fill_depth + self.mip_depth + self.fill_primitives
-    }
-}
-
-/// Checks `params` and `tris` and makes the view set both backends build over.
-///
-/// Views that no triangle reaches (see [`views_reached`]) are left out: they
-/// get no build passes and no memory, and rays skip them. That changes no hit.
-pub fn views_for(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CpuError> {
-    let mut views = views_for_all(tris, params)?;
-    let keep = views_reached(&views, tris);
-    views.leave_out(&keep);
-    Ok(views)
-}
-
-/// Which views at least one triangle reaches: the triangle, clipped to the
-/// view's (dilated) frustum, is not empty and has a tile range. This is the
-/// gate `fill_depth` and `fill_primitives` pass before their per-tile tests,
-/// so a view that fails it for every triangle has no covered tile, and no
-/// hit can lie in it.
-pub fn views_reached(views: &ViewSet, tris: &[Triangle]) -> Vec<bool> {
-    use rayon::prelude::*;
-    views
-        .views
-        .iter()
-        .map(|v| {
-            v.has_content
-                && tris.par_iter().any(|t| {
-                    let tv = [
-                        v.to_view(t.vertex(0)),
-                        v.to_view(t.vertex(1)),
-                        v.to_view(t.vertex(2)),
-                    ];
-                    clip_triangle_to_view(v, tv)
-                        .and_then(|p| polygon_tile_range(v, &p))
-                        .is_some()
-                })
-        })
-        .collect()
-}
-
-/// Why a view was left out of the structure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LeftOutReason {
-    /// No part of the scene bounds is in front of its near plane.
-    BoundsBehind,
-    /// The bounds reach it, but no triangle reaches any of its tiles.
-    NoTriangleReaches,
-}
-
-/// A view [`views_for`] leaves out: no passes, no memory, skipped by rays.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LeftOutView {
-    /// Index in the view set.
-    pub view: usize,
-    /// `+X`, `-X`, `+Y`, `-Y`, `+Z`, `-Z` for a cube face; `single` for the single view.
-    pub name: &'static str,
-    pub reason: LeftOutReason,
-}
-
-/// The views [`views_for`] leaves out for `tris` and `params`, with the reason.
-pub fn left_out_views(tris: &[Triangle], params: &AdsParams) -> Result<Vec<LeftOutView>, CpuError> {
-    let all = views_for_all(tris, params)?;
-    let reached = views_reached(&all, tris);
-    const FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
-    Ok(all
-        .views
-        .iter()
-        .enumerate()
-        .filter(|&(k, _)| !reached[k])
-        .map(|(k, v)| LeftOutView {
-            view: k,
-            name: match all.kind {
-                ViewsKind::Cube => FACES.get(k).copied().unwrap_or("?"),
-                ViewsKind::Single => "single",
-            },
-            reason: if v.has_content {
-                LeftOutReason::NoTriangleReaches
-            } else {
-                LeftOutReason::BoundsBehind
-            },
-        })
-        .collect())
-}
-
-/// [`views_for`] without leaving out the views no triangle reaches: every
-/// view whose frustum meets the scene bounds is built (the papers'
-/// configuration; the baseline that leaving out is measured against).
-pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CpuError> {
-    params.validate()?;
-    if let Some(index) = tris.iter().position(|t| !t.is_finite()) {
-        return Err(CpuError::NonFiniteTriangle { index });
-    }
-    let mut bounds = Aabb::of_triangles(tris);
-    if bounds.is_empty() {
-        bounds = Aabb {
-            min: Vec3::splat(-1.0),
-            max: Vec3::splat(1.0),
-        };
-    }
-    let tiles = params.tiles();
-    Ok(match params.views {
-        ViewsKind::Cube => ViewSet::cube(params.center.unwrap_or(bounds.center()), &bounds, tiles),
-        ViewsKind::Single => ViewSet::single(params.center, &bounds, tiles),
-    })
 }
 
 /// The acceleration structure: views, depth bounds with their Hi-Z pyramid,

@@ -10,7 +10,8 @@
 //! cell or bucket lies beyond the best hit found (design brief §2), so the
 //! result equals the brute-force closest hit.
 
-use crate::{Ads, RayStats, Traversal};
+use crate::Ads;
+use dirt_core::{RayStats, Traversal};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
 use dirt_math::clip::{Interval, clip_ray_to_view, ray_depth};
 use dirt_math::dda::{HiZCell, Walk, child_order, projected_direction, walk_tiles};
@@ -42,6 +43,29 @@ pub fn trace_with_stats(
             (h, s)
         })
         .unzip()
+}
+
+/// [`trace`] into caller-owned buffers, with per-ray statistics when `stats`
+/// is given. `hits` (and `stats`) must hold one entry per ray.
+pub fn trace_into(
+    ads: &Ads,
+    tris: &[Triangle],
+    rays: &[Ray],
+    traversal: Traversal,
+    hits: &mut [Hit],
+    stats: Option<&mut [RayStats]>,
+) {
+    match stats {
+        Some(stats) => rays
+            .par_iter()
+            .zip(hits.par_iter_mut())
+            .zip(stats.par_iter_mut())
+            .for_each(|((r, h), s)| *h = trace_ray(ads, tris, r, traversal, s)),
+        None => rays
+            .par_iter()
+            .zip(hits.par_iter_mut())
+            .for_each(|(r, h)| *h = trace_ray(ads, tris, r, traversal, &mut RayStats::default())),
+    }
 }
 
 struct Ctx<'a> {

@@ -1,6 +1,7 @@
 //! Exactness of `trace` against `brute_force` on random triangle soups.
 
-use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind, brute_force, trace_with_stats};
+use dirt_core::{AdsParams, Traversal, ViewsKind};
+use dirt_cpu::{Ads, brute_force, trace_with_stats};
 use dirt_math::{Ray, Triangle, Vec3};
 
 struct Rng(u64);

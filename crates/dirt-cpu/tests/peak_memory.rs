@@ -2,7 +2,8 @@
 //! of 001 Table 3, measured with a counting allocator.
 #![allow(unsafe_code)]
 
-use dirt_cpu::{Ads, AdsParams};
+use dirt_core::AdsParams;
+use dirt_cpu::Ads;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 

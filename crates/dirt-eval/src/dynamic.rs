@@ -6,7 +6,8 @@
 
 use std::time::Instant;
 
-use dirt_cpu::{Ads, AdsParams, Traversal};
+use dirt_core::{AdsParams, Traversal};
+use dirt_cpu::Ads;
 use dirt_math::{Ray, Triangle, Vec3};
 use indicatif::ProgressBar;
 use serde::Serialize;

@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use dirt_cpu::{Ads, AdsParams, Traversal, ViewsKind};
+use dirt_core::{AdsParams, Traversal, ViewsKind};
+use dirt_cpu::Ads;
 use dirt_math::{Hit, Ray, RayStats, Triangle};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;

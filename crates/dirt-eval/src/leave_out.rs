@@ -13,8 +13,9 @@
 
 use std::time::Instant;
 
+use dirt_core::{AdsParams, Traversal};
 use dirt_cpu::cost::{CostModel, candidates, choose};
-use dirt_cpu::{Ads, AdsParams, Traversal, trace};
+use dirt_cpu::{Ads, trace};
 use dirt_math::{Hit, Ray, Triangle, Vec3};
 use serde::Serialize;
 

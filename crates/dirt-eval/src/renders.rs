@@ -11,10 +11,10 @@
 
 use std::time::Instant;
 
-use dirt_cpu::{AdsParams, Traversal};
+use dirt_core::{AdsParams, Tracer, Traversal};
+use dirt_cpu::DirtCpu;
 use dirt_render::output::Image;
 use dirt_render::reference::Reference;
-use dirt_render::trace::{DirtCpu, Tracer};
 use dirt_render::{Camera, Renderer, Settings};
 use serde::Serialize;
 
@@ -64,7 +64,7 @@ pub struct RenderReference {
     pub wall_ms: f64,
 }
 
-fn render_err(e: dirt_render::RenderError) -> EvalError {
+fn render_err(e: impl std::fmt::Display) -> EvalError {
     EvalError::Render(e.to_string())
 }
 
@@ -124,7 +124,7 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
     let start = Instant::now();
     let renderer =
         Renderer::new(&scene, camera, settings(cfg.reference_spp, 0x5eed)).map_err(render_err)?;
-    let mut reference_tracer = Reference::build(&scene.triangles);
+    let mut reference_tracer = Reference::new(&scene.triangles);
     let reference = renderer
         .render(&mut reference_tracer, &mut |_| {})
         .map_err(render_err)?
@@ -143,11 +143,11 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
             let start = Instant::now();
             let mut tracer: Box<dyn Tracer> = if which == 0 {
                 Box::new(
-                    DirtCpu::build(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
+                    DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
                         .map_err(render_err)?,
                 )
             } else {
-                Box::new(Reference::build(&scene.triangles))
+                Box::new(Reference::new(&scene.triangles))
             };
             let r = renderer
                 .render(&mut tracer, &mut |_| {})

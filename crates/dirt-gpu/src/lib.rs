@@ -18,14 +18,16 @@ pub mod params;
 pub mod selftest;
 pub mod spirv;
 pub mod trace;
+pub mod tracer;
 
 pub use context::Gpu;
 pub use params::{BuildParams, MipParams, ScanParams, TraceParams};
+pub use tracer::DirtGpu;
 
-use dirt_cpu::{AdsParams, CpuError, IdLists};
+use dirt_core::{AdsParams, BuildTimings, CoreError, IdLists};
 use dirt_math::dda::{hiz_levels, hiz_width};
 use dirt_math::{Triangle, ViewGpu, ViewSet};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// Errors of the GPU backend.
@@ -43,7 +45,10 @@ pub enum GpuError {
         message: String,
     },
     #[error(transparent)]
-    Params(#[from] CpuError),
+    Params(#[from] CoreError),
+    /// The CPU reference, which finishes rays that spent their GPU work budget.
+    #[error(transparent)]
+    Cpu(#[from] dirt_cpu::CpuError),
     #[error(
         "{what} needs {bytes} bytes in one binding; this adapter allows {limit} (max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene"
     )]
@@ -152,14 +157,6 @@ impl Pipelines {
     }
 }
 
-/// Wall time of each build stage (submission to completion).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct GpuTimings {
-    pub fill_depth: Duration,
-    pub mip_depth: Duration,
-    pub fill_primitives: Duration,
-}
-
 /// The acceleration structure on the GPU.
 #[derive(Debug)]
 pub struct GpuAds {
@@ -167,7 +164,8 @@ pub struct GpuAds {
     pub views: ViewSet,
     pub n_tris: u32,
     pub nodes: u32,
-    pub timings: GpuTimings,
+    /// Wall time of each build stage (submission to completion).
+    pub timings: BuildTimings,
     pub(crate) tris: wgpu::Buffer,
     pub(crate) views_uniform: wgpu::Buffer,
     /// All Hi-Z levels, level 0 (the depth bounds) first; two u32 per cell.
@@ -288,7 +286,7 @@ fn views_gpu(views: &ViewSet) -> [ViewGpu; 6] {
 impl GpuAds {
     /// Builds the structure on the GPU: `fill_depth`, `mip_depth`, `fill_primitives`.
     pub fn build(gpu: &Gpu, tris: &[Triangle], params: &AdsParams) -> Result<GpuAds, GpuError> {
-        let views = dirt_cpu::views_for(tris, params)?;
+        let views = dirt_core::views_for(tris, params)?;
         let tiles = params.tiles();
         let n_views = views.views.len() as u32;
         // Views without content get no passes and no memory: buffers hold one block per slot.
@@ -297,7 +295,7 @@ impl GpuAds {
             .filter(|&v| views.views[v as usize].has_content)
             .collect();
         let n_tris = u32::try_from(tris.len()).map_err(|_| {
-            CpuError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len()))
+            CoreError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len()))
         })?;
         // Everything that must fit one binding is checked before any work starts.
         check_binding(gpu, "triangles", tris.len() as u64 * 36)?;
@@ -354,7 +352,7 @@ impl GpuAds {
             views,
             n_tris,
             nodes,
-            timings: GpuTimings {
+            timings: BuildTimings {
                 fill_depth: t1 - t0,
                 mip_depth: t2 - t1,
                 fill_primitives: t3 - t2,
@@ -367,6 +365,12 @@ impl GpuAds {
             triangles: tris.to_vec(),
             cpu: std::sync::OnceLock::new(),
         })
+    }
+
+    /// Bytes of the structure on the GPU: the Hi-Z pyramid (depth bounds
+    /// included), list offsets and ids, as allocated.
+    pub fn memory_bytes(&self) -> u64 {
+        self.hiz.size() + self.offsets.size() + self.ids.size()
     }
 
     /// Hi-Z levels read back, level 0 (the depth bounds) first, in the CPU's layout.

@@ -11,7 +11,7 @@ use crate::fill_primitives::grid;
 use crate::{
     Gpu, GpuAds, GpuError, TraceParams, check_binding, read_back, storage_init, uniform_init,
 };
-use dirt_cpu::Traversal;
+use dirt_core::Traversal;
 use dirt_math::dda::hiz_levels;
 use dirt_math::{Hit, Ray, RayStats};
 

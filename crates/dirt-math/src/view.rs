@@ -182,6 +182,7 @@ pub fn corners(b: &Aabb) -> [Vec3; 8] {
 
 /// Which set of views covers the scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ViewsKind {
     /// Six 90° perspective views around a centre (004 §3.2). Exact for every ray.
     #[default]

@@ -78,6 +78,8 @@ pub enum RenderError {
     #[error("images differ in size: {a:?} and {b:?}")]
     SizeMismatch { a: (u32, u32), b: (u32, u32) },
     #[error(transparent)]
+    Trace(#[from] dirt_core::CoreError),
+    #[error(transparent)]
     Cpu(#[from] dirt_cpu::CpuError),
     #[error(transparent)]
     Gpu(#[from] dirt_gpu::GpuError),

@@ -47,7 +47,7 @@ impl std::fmt::Debug for Reference {
 
 impl Reference {
     /// Builds the BVH (obvhs `build_bvh2`, medium quality).
-    pub fn build(tris: &[Triangle]) -> Self {
+    pub fn new(tris: &[Triangle]) -> Self {
         let scale = tris
             .iter()
             .flat_map(|t| t.v.iter().flatten())
@@ -93,10 +93,18 @@ impl Reference {
         }
     }
 
-    /// Closest hits of `rays` (in parallel). Rays that fail
-    /// [`Ray::validate`] miss, as in brute force.
-    pub fn trace(&self, rays: &[Ray]) -> Vec<Hit> {
-        rays.par_iter().map(|r| self.trace_ray(r)).collect()
+    /// Closest hits of `rays` into `hits` (in parallel, one per ray). Rays
+    /// that fail [`Ray::validate`] miss, as in brute force.
+    pub fn trace_to(&self, rays: &[Ray], hits: &mut [Hit]) {
+        rays.par_iter()
+            .zip(hits.par_iter_mut())
+            .for_each(|(r, h)| *h = self.trace_ray(r));
+    }
+
+    /// Bytes of the walk's nodes and primitive indices.
+    pub fn memory_bytes(&self) -> u64 {
+        (std::mem::size_of_val(self.nodes.as_slice())
+            + std::mem::size_of_val(self.prims.as_slice())) as u64
     }
 
     /// The closest hit of one ray.

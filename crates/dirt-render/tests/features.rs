@@ -1,9 +1,9 @@
 //! A render runs only what its scene and mode need, and leaving the rest out
 //! changes no pixel.
 
-use dirt_cpu::{AdsParams, Traversal};
+use dirt_core::{AdsParams, Traversal};
+use dirt_cpu::DirtCpu;
 use dirt_render::fetch::Fetcher;
-use dirt_render::trace::DirtCpu;
 use dirt_render::{Camera, Mode, Renderer, Settings, features};
 use dirt_scene::Scene;
 
@@ -47,7 +47,7 @@ fn ambient_occlusion_fetches_geometry_only_and_the_image_is_the_same() {
     let mut full = Renderer::new(&scene, camera, s).expect("renderer");
     full.fetcher = Fetcher::new(&scene);
     let mut t =
-        DirtCpu::build(&scene.triangles, &AdsParams::default(), Traversal::HiZ).expect("build");
+        DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::HiZ).expect("build");
     let a = lean.render(&mut t, &mut |_| {}).expect("render");
     let b = full.render(&mut t, &mut |_| {}).expect("render");
     let bits = |i: &dirt_render::Image| {

@@ -3,12 +3,12 @@
 //! furnace converges to its analytic radiance, materials, textures and lights
 //! are used, and bad input is refused.
 
-use dirt_cpu::{AdsParams, Traversal};
+use dirt_core::{AdsParams, Tracer, Traversal};
+use dirt_cpu::{DirtCpu, brute_force::Brute};
 use dirt_math::{Ray, Triangle, Vec3};
 use dirt_render::direct_visibility::{self, rasterize};
 use dirt_render::metrics::{mean, rmse};
 use dirt_render::reference::Reference;
-use dirt_render::trace::{Brute, DirtCpu, Tracer};
 use dirt_render::{Camera, Mode, RenderError, Renderer, Settings};
 use dirt_scene::{Light, LightKind, Material, Scene, Texture};
 
@@ -31,7 +31,7 @@ fn render_with(scene: &Scene, s: Settings, tracer: &mut dyn Tracer) -> dirt_rend
 }
 
 fn render_cpu(scene: &Scene, s: Settings) -> dirt_render::Rendered {
-    let mut t = DirtCpu::build(&scene.triangles, &AdsParams::default(), Traversal::Linear)
+    let mut t = DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::Linear)
         .expect("dirt build");
     render_with(scene, s, &mut t)
 }
@@ -88,10 +88,10 @@ fn dirt_equals_reference_and_brute_pixel_for_pixel() {
         for mode in [Mode::Pt, Mode::Ao, Mode::Direct] {
             let s = settings(20, 16, 2, 3, mode);
             let dirt = render_cpu(scene, s);
-            let mut hiz = DirtCpu::build(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
+            let mut hiz = DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
                 .expect("dirt build");
             let dirt_hiz = render_with(scene, s, &mut hiz);
-            let reference = render_with(scene, s, &mut Reference::build(&scene.triangles));
+            let reference = render_with(scene, s, &mut Reference::new(&scene.triangles));
             let brute = render_with(scene, s, &mut Brute::new(&scene.triangles));
             assert!(
                 mean(&dirt.image) > 0.0,
@@ -239,7 +239,7 @@ fn white_furnace_converges_to_the_analytic_radiance() {
             russian_roulette: roulette,
             ..settings(16, 16, 32, k, Mode::Pt)
         };
-        let r = render_with(&scene, s, &mut Reference::build(&scene.triangles));
+        let r = render_with(&scene, s, &mut Reference::new(&scene.triangles));
         let m = mean(&r.image);
         assert!(
             (m - expected).abs() <= tol * expected,
@@ -369,7 +369,7 @@ fn more_samples_reduce_the_error() {
             seed: 1000,
             ..settings(12, 12, 256, 3, Mode::Pt)
         },
-        &mut Reference::build(&scene.triangles),
+        &mut Reference::new(&scene.triangles),
     )
     .image;
     let err = |spp| {

@@ -1,0 +1,112 @@
+//! View selection: the view set both backends build over, and which views are
+//! left out because no geometry reaches them.
+
+use crate::{AdsParams, CoreError};
+use dirt_math::clip::{clip_triangle_to_view, polygon_tile_range};
+use dirt_math::{Aabb, Triangle, Vec3, ViewSet, ViewsKind};
+
+/// Checks `params` and `tris` and makes the view set both backends build over.
+///
+/// Views that no triangle reaches (see [`views_reached`]) are left out: they
+/// get no build passes and no memory, and rays skip them. That changes no hit.
+pub fn views_for(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CoreError> {
+    let mut views = views_for_all(tris, params)?;
+    let keep = views_reached(&views, tris);
+    views.leave_out(&keep);
+    Ok(views)
+}
+
+/// Which views at least one triangle reaches: the triangle, clipped to the
+/// view's (dilated) frustum, is not empty and has a tile range. This is the
+/// gate `fill_depth` and `fill_primitives` pass before their per-tile tests,
+/// so a view that fails it for every triangle has no covered tile, and no
+/// hit can lie in it.
+pub fn views_reached(views: &ViewSet, tris: &[Triangle]) -> Vec<bool> {
+    use rayon::prelude::*;
+    views
+        .views
+        .iter()
+        .map(|v| {
+            v.has_content
+                && tris.par_iter().any(|t| {
+                    let tv = [
+                        v.to_view(t.vertex(0)),
+                        v.to_view(t.vertex(1)),
+                        v.to_view(t.vertex(2)),
+                    ];
+                    clip_triangle_to_view(v, tv)
+                        .and_then(|p| polygon_tile_range(v, &p))
+                        .is_some()
+                })
+        })
+        .collect()
+}
+
+/// Why a view was left out of the structure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LeftOutReason {
+    /// No part of the scene bounds is in front of its near plane.
+    BoundsBehind,
+    /// The bounds reach it, but no triangle reaches any of its tiles.
+    NoTriangleReaches,
+}
+
+/// A view [`views_for`] leaves out: no passes, no memory, skipped by rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LeftOutView {
+    /// Index in the view set.
+    pub view: usize,
+    /// `+X`, `-X`, `+Y`, `-Y`, `+Z`, `-Z` for a cube face; `single` for the single view.
+    pub name: &'static str,
+    pub reason: LeftOutReason,
+}
+
+/// The views [`views_for`] leaves out for `tris` and `params`, with the reason.
+pub fn left_out_views(
+    tris: &[Triangle],
+    params: &AdsParams,
+) -> Result<Vec<LeftOutView>, CoreError> {
+    let all = views_for_all(tris, params)?;
+    let reached = views_reached(&all, tris);
+    const FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
+    Ok(all
+        .views
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| !reached[k])
+        .map(|(k, v)| LeftOutView {
+            view: k,
+            name: match all.kind {
+                ViewsKind::Cube => FACES.get(k).copied().unwrap_or("?"),
+                ViewsKind::Single => "single",
+            },
+            reason: if v.has_content {
+                LeftOutReason::NoTriangleReaches
+            } else {
+                LeftOutReason::BoundsBehind
+            },
+        })
+        .collect())
+}
+
+/// [`views_for`] without leaving out the views no triangle reaches: every
+/// view whose frustum meets the scene bounds is built (the papers'
+/// configuration; the baseline that leaving out is measured against).
+pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CoreError> {
+    params.validate()?;
+    if let Some(index) = tris.iter().position(|t| !t.is_finite()) {
+        return Err(CoreError::NonFiniteTriangle { index });
+    }
+    let mut bounds = Aabb::of_triangles(tris);
+    if bounds.is_empty() {
+        bounds = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+    }
+    let tiles = params.tiles();
+    Ok(match params.views {
+        ViewsKind::Cube => ViewSet::cube(params.center.unwrap_or(bounds.center()), &bounds, tiles),
+        ViewsKind::Single => ViewSet::single(params.center, &bounds, tiles),
+    })
+}
