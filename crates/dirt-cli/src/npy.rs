@@ -26,7 +26,7 @@ pub const TRIANGLE_COLUMNS: u64 = 9;
 
 /// What can go wrong reading or writing the `.npy` files of the command line.
 #[derive(Debug, thiserror::Error)]
-pub enum CliError {
+pub enum NpyError {
     #[error("cannot open {}", path.display())]
     Open {
         path: PathBuf,
@@ -65,12 +65,12 @@ pub enum CliError {
     },
 }
 
-impl CliError {
-    /// The 0-based row a [`CliError::BadRay`] is about.
+impl NpyError {
+    /// The 0-based row a [`NpyError::BadRay`] is about.
     #[cfg(test)]
     pub fn row(&self) -> Option<usize> {
         match self {
-            CliError::BadRay { row, .. } => Some(*row),
+            NpyError::BadRay { row, .. } => Some(*row),
             _ => None,
         }
     }
@@ -118,8 +118,8 @@ pub fn row_from_ray(r: &Ray) -> [f32; 8] {
 }
 
 /// Reads and validates a rays file.
-pub fn read_rays(path: &Path) -> Result<Vec<Ray>, CliError> {
-    let file = File::open(path).map_err(|source| CliError::Open {
+pub fn read_rays(path: &Path) -> Result<Vec<Ray>, NpyError> {
+    let file = File::open(path).map_err(|source| NpyError::Open {
         path: path.to_owned(),
         source,
     })?;
@@ -127,14 +127,14 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>, CliError> {
 }
 
 /// Reads and validates rays from `reader`; `path` only names the source in errors.
-pub fn read_rays_from(reader: impl Read, path: &Path) -> Result<Vec<Ray>, CliError> {
+pub fn read_rays_from(reader: impl Read, path: &Path) -> Result<Vec<Ray>, NpyError> {
     let data = read_f32_matrix(reader, path, RAY_COLUMNS)?;
     let mut rays = Vec::with_capacity(data.len() / RAY_COLUMNS as usize);
     for (row, chunk) in data.chunks_exact(RAY_COLUMNS as usize).enumerate() {
         let mut values = [0.0f32; 8];
         values.copy_from_slice(chunk);
         let ray = ray_from_row(&values);
-        ray.validate().map_err(|problem| CliError::BadRay {
+        ray.validate().map_err(|problem| NpyError::BadRay {
             path: path.to_owned(),
             row,
             problem,
@@ -147,7 +147,7 @@ pub fn read_rays_from(reader: impl Read, path: &Path) -> Result<Vec<Ray>, CliErr
 
 /// Reads a triangles file (used by the tests to read back `dirt triangles`).
 #[cfg(test)]
-pub fn read_triangles_from(reader: impl Read, path: &Path) -> Result<Vec<Triangle>, CliError> {
+pub fn read_triangles_from(reader: impl Read, path: &Path) -> Result<Vec<Triangle>, NpyError> {
     let data = read_f32_matrix(reader, path, TRIANGLE_COLUMNS)?;
     Ok(data
         .chunks_exact(TRIANGLE_COLUMNS as usize)
@@ -158,31 +158,31 @@ pub fn read_triangles_from(reader: impl Read, path: &Path) -> Result<Vec<Triangl
 }
 
 /// Reads a C-order float32 array of shape `(N, columns)` as a flat vector.
-fn read_f32_matrix(mut reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f32>, CliError> {
+fn read_f32_matrix(mut reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f32>, NpyError> {
     let header = read_header(&mut reader, path)?;
     let npy = NpyFile::with_header(header, reader);
     let dtype = npy.dtype();
     let is_f32 = matches!(&dtype, DType::Plain(ts) if ts.type_char() == TypeChar::Float && ts.size_field() == 4);
     if !is_f32 {
-        return Err(CliError::DType {
+        return Err(NpyError::DType {
             path: path.to_owned(),
             found: dtype_text(&dtype),
         });
     }
     let shape = npy.shape().to_vec();
     if shape.len() != 2 || shape[1] != columns {
-        return Err(CliError::Shape {
+        return Err(NpyError::Shape {
             path: path.to_owned(),
             found: shape,
             columns,
         });
     }
     if npy.order() == Order::Fortran {
-        return Err(CliError::FortranOrder {
+        return Err(NpyError::FortranOrder {
             path: path.to_owned(),
         });
     }
-    let data_err = |reason: String| CliError::Data {
+    let data_err = |reason: String| NpyError::Data {
         path: path.to_owned(),
         reason,
     };
@@ -211,8 +211,8 @@ const MAX_HEADER_BYTES: usize = 1 << 20;
 /// Reads the header: magic, version, length and the dictionary, which is
 /// checked for a shape whose element count overflows before npyz sees it
 /// (npyz multiplies the dimensions unchecked and panics on overflow).
-fn read_header(reader: &mut impl Read, path: &Path) -> Result<NpyHeader, CliError> {
-    let not_npy = |reason: String| CliError::NotNpy {
+fn read_header(reader: &mut impl Read, path: &Path) -> Result<NpyHeader, NpyError> {
+    let not_npy = |reason: String| NpyError::NotNpy {
         path: path.to_owned(),
         reason,
     };
@@ -325,25 +325,25 @@ fn dtype_text(dtype: &DType) -> String {
 }
 
 /// Writes rays as float32 `(N, 8)`.
-pub fn write_rays(path: &Path, rays: &[Ray]) -> Result<(), CliError> {
+pub fn write_rays(path: &Path, rays: &[Ray]) -> Result<(), NpyError> {
     write_file(path, |w| write_rays_to(w, rays))
 }
 
 /// Writes closest hits as uint32 `(N, 4)`; any miss is written as [`Hit::MISS`].
-pub fn write_hits(path: &Path, hits: &[Hit]) -> Result<(), CliError> {
+pub fn write_hits(path: &Path, hits: &[Hit]) -> Result<(), NpyError> {
     write_file(path, |w| write_hits_to(w, hits))
 }
 
 /// Writes triangles as float32 `(T, 9)`.
-pub fn write_triangles(path: &Path, tris: &[Triangle]) -> Result<(), CliError> {
+pub fn write_triangles(path: &Path, tris: &[Triangle]) -> Result<(), NpyError> {
     write_file(path, |w| write_triangles_to(w, tris))
 }
 
 fn write_file(
     path: &Path,
     body: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
-) -> Result<(), CliError> {
-    let write_err = |source| CliError::Write {
+) -> Result<(), NpyError> {
+    let write_err = |source| NpyError::Write {
         path: path.to_owned(),
         source,
     };
@@ -479,7 +479,7 @@ mod tests {
         out
     }
 
-    fn read(bytes: &[u8]) -> Result<Vec<Ray>, CliError> {
+    fn read(bytes: &[u8]) -> Result<Vec<Ray>, NpyError> {
         read_rays_from(bytes, name())
     }
 
@@ -564,10 +564,10 @@ mod tests {
     #[test]
     fn not_an_npy_file() {
         let err = read(b"ox oy oz tmin dx dy dz tmax\n0 0 0 0 0 0 1 1\n").expect_err("text");
-        assert!(matches!(err, CliError::NotNpy { .. }), "{err}");
+        assert!(matches!(err, NpyError::NotNpy { .. }), "{err}");
         assert!(err.to_string().contains("not a .npy file"), "{err}");
         let err = read(b"").expect_err("empty");
-        assert!(matches!(err, CliError::NotNpy { .. }), "{err}");
+        assert!(matches!(err, NpyError::NotNpy { .. }), "{err}");
     }
 
     #[test]
@@ -579,7 +579,7 @@ mod tests {
             ("<f2", "float16"),
         ] {
             let err = read(&raw_npy(dtype, &[2, 8], false, &[0u8; 16 * 8])).expect_err(dtype);
-            assert!(matches!(err, CliError::DType { .. }), "{dtype}: {err}");
+            assert!(matches!(err, NpyError::DType { .. }), "{dtype}: {err}");
             assert!(err.to_string().contains(word), "{err}");
             assert!(err.to_string().contains("expected float32"), "{err}");
         }
@@ -606,7 +606,7 @@ mod tests {
             ))
             .expect_err("shape");
             match &err {
-                CliError::Shape { found, columns, .. } => {
+                NpyError::Shape { found, columns, .. } => {
                     assert_eq!(found, &shape);
                     assert_eq!(*columns, 8);
                 }
@@ -628,7 +628,7 @@ mod tests {
             &f32_bytes(&[1.0; 16], false),
         ))
         .expect_err("fortran");
-        assert!(matches!(err, CliError::FortranOrder { .. }), "{err}");
+        assert!(matches!(err, NpyError::FortranOrder { .. }), "{err}");
         assert!(err.to_string().contains("C order"), "{err}");
     }
 
@@ -640,7 +640,7 @@ mod tests {
             let bytes = raw_npy("<f4", &shape, false, &[]);
             let e = read(&bytes).expect_err("refused");
             assert!(
-                matches!(e, CliError::NotNpy { .. } | CliError::Shape { .. }),
+                matches!(e, NpyError::NotNpy { .. } | NpyError::Shape { .. }),
                 "{e}"
             );
         }
@@ -680,7 +680,7 @@ mod tests {
         let mut bytes = f32_file(&[[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]; 4]);
         bytes.truncate(bytes.len() - 6);
         let err = read(&bytes).expect_err("truncated");
-        assert!(matches!(err, CliError::Data { .. }), "{err}");
+        assert!(matches!(err, NpyError::Data { .. }), "{err}");
     }
 
     /// Each malformed ray, placed at row 2 after two good rows, with the problem it must report.
@@ -744,7 +744,7 @@ mod tests {
         for (bad, problem, words) in cases {
             let err = read(&f32_file(&[good, good, bad, good])).expect_err("bad ray");
             match &err {
-                CliError::BadRay {
+                NpyError::BadRay {
                     row, problem: p, ..
                 } => {
                     assert_eq!(*row, 2, "{err}");

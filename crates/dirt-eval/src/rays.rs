@@ -93,6 +93,7 @@ impl Pcg32 {
 
 /// Which test rays [`generate`] makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum RayKind {
     /// All families below, interleaved (the default; use it for exactness checks).
     Mixed,

@@ -192,6 +192,22 @@ pub enum ViewsKind {
     Single,
 }
 
+impl ViewsKind {
+    /// The name used on command lines and in reports: `cube` or `single`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewsKind::Cube => "cube",
+            ViewsKind::Single => "single",
+        }
+    }
+}
+
+impl std::fmt::Display for ViewsKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Edges of a view's image, in adjacency order.
 pub const EDGE_LEFT: usize = 0; // x = -tan·z
 pub const EDGE_RIGHT: usize = 1; // x = +tan·z

@@ -91,6 +91,7 @@ pub enum RenderError {
 
 /// What a render computes per pixel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Mode {
     /// Path tracing with next-event estimation and Russian roulette.
     #[default]

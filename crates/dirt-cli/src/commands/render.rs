@@ -14,7 +14,8 @@ use dirt_render::reference::Reference;
 use dirt_render::{Camera, Mode, Renderer, Settings};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::{AdsArgs, SceneArg, TraversalArg, fallback_line, gpu_line, open_gpu, open_scene};
+use crate::args::{AdsArgs, SceneArg};
+use crate::gpu::{fallback_line, gpu_line, open_gpu};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -37,8 +38,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "H", default_value_t = Settings::default().height)]
     height: u32,
     /// What each pixel estimates.
-    #[arg(long, value_enum, default_value_t = ModeArg::Pt)]
-    mode: ModeArg,
+    #[arg(long, value_enum, default_value_t = Mode::default())]
+    mode: Mode,
     /// Ambient-occlusion distance [default: a quarter of the scene's diagonal].
     #[arg(long, value_name = "R")]
     ao_radius: Option<f32>,
@@ -50,15 +51,15 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = RenderBackend::Auto)]
     backend: RenderBackend,
     /// How DIRT walks the tiles a ray crosses.
-    #[arg(long, value_enum, default_value_t = TraversalArg::from(Traversal::default()))]
-    traversal: TraversalArg,
+    #[arg(long, value_enum, default_value_t = Traversal::default())]
+    traversal: Traversal,
     #[command(flatten)]
     ads: AdsArgs,
     /// Camera position "X,Y,Z" [default: the scene's first camera, else a framing of the bounds].
-    #[arg(long, value_name = "X,Y,Z", value_parser = crate::parse_center, allow_hyphen_values = true)]
+    #[arg(long, value_name = "X,Y,Z", value_parser = crate::args::parse_point, allow_hyphen_values = true)]
     eye: Option<Vec3>,
     /// Point the camera looks at, "X,Y,Z".
-    #[arg(long, value_name = "X,Y,Z", value_parser = crate::parse_center, allow_hyphen_values = true)]
+    #[arg(long, value_name = "X,Y,Z", value_parser = crate::args::parse_point, allow_hyphen_values = true)]
     target: Option<Vec3>,
     /// Vertical field of view in degrees.
     #[arg(long, value_name = "DEG")]
@@ -75,26 +76,6 @@ pub struct RenderArgs {
         allow_hyphen_values = true
     )]
     exposure: f32,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum ModeArg {
-    /// Path tracing with next-event estimation and Russian roulette.
-    Pt,
-    /// Ambient occlusion.
-    Ao,
-    /// Direct light only (one scattering event).
-    Direct,
-}
-
-impl From<ModeArg> for Mode {
-    fn from(m: ModeArg) -> Self {
-        match m {
-            ModeArg::Pt => Mode::Pt,
-            ModeArg::Ao => Mode::Ao,
-            ModeArg::Direct => Mode::Direct,
-        }
-    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -127,13 +108,13 @@ fn camera(args: &RenderArgs, scene: &dirt_scene::Scene) -> Result<Camera> {
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    let scene = open_scene(&args.scene.scene)?;
+    let scene = args.scene.open()?;
     let settings = Settings {
         width: args.width,
         height: args.height,
         spp: args.spp,
         bounces: args.bounces,
-        mode: args.mode.into(),
+        mode: args.mode,
         seed: args.seed,
         ao_radius: args.ao_radius,
         ..Settings::default()
@@ -149,7 +130,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         );
     }
     let params = args.ads.params();
-    let traversal = Traversal::from(args.traversal);
+    let traversal = args.traversal;
     let tris = &scene.triangles;
     let gpu = match args.backend {
         RenderBackend::Auto | RenderBackend::Gpu => match open_gpu() {

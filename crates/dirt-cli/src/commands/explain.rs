@@ -9,26 +9,11 @@ use dirt_cpu::Ads;
 use dirt_cpu::cost::{CostModel, candidates, choose};
 use dirt_scene::Scene;
 
-use crate::raygen::{self, RayKind};
+use crate::args::Given;
+use dirt_eval::rays::{self, RayKind};
 
 /// Rays of the sample the cost model counts per candidate.
 const SAMPLE: usize = 2000;
-
-/// Which build parameters the user gave (the rest are defaults or the model's).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Given {
-    pub views: bool,
-    pub resolution: bool,
-    pub buckets: bool,
-    pub tile: bool,
-}
-
-fn views_name(v: ViewsKind) -> &'static str {
-    match v {
-        ViewsKind::Cube => "cube",
-        ViewsKind::Single => "single",
-    }
-}
 
 fn kib(bytes: u64) -> f64 {
     bytes as f64 / 1024.0
@@ -51,7 +36,7 @@ pub fn explain(
     let _ = writeln!(
         o,
         "  views: {} — {}",
-        views_name(params.views),
+        ViewsKind::name(params.views),
         match (params.views, params.center) {
             (ViewsKind::Cube, _) =>
                 "six 90° views around one centre see all of space: exact for every ray",
@@ -63,8 +48,7 @@ pub fn explain(
     );
 
     // Parameters: given, or ranked by the cost model on a ray sample.
-    let sample = raygen::generate(tris, None, RayKind::Mixed, SAMPLE, 1)
-        .map_err(anyhow::Error::msg)
+    let sample = rays::generate(tris, None, RayKind::Mixed, SAMPLE, 1)
         .context("cannot make the ray sample for the cost model")?;
     let model = CostModel::CALIBRATED;
     let mut cands = candidates(params, !given.views);
@@ -105,7 +89,7 @@ pub fn explain(
         let _ = writeln!(
             o,
             "    {:>6} {:>10} {:>4} {:>4} {:>10} {:>10.1} {:>10.1} {:>10.1} {:>9.0}{}{}",
-            views_name(c.params.views),
+            ViewsKind::name(c.params.views),
             c.params.resolution,
             c.params.buckets,
             c.params.tile,
@@ -127,7 +111,7 @@ pub fn explain(
             o,
             "    every candidate gives the same hits; pass --auto to build with the cheapest \
              (here {} views, resolution {}, B = {}), or set --views/--resolution/--buckets/--tile yourself",
-            views_name(best.params.views),
+            ViewsKind::name(best.params.views),
             best.params.resolution,
             best.params.buckets
         );

@@ -18,8 +18,10 @@ use dirt_cpu::Ads;
 use dirt_gpu::{Gpu, GpuAds};
 use dirt_math::{Hit, Ray, RayStats, Triangle};
 
-use crate::raygen::{self, RayKind};
-use crate::{AdsArgs, Backend, SceneArg, TraversalArg, millis, open_scene, scene_camera};
+use crate::args::{AdsArgs, SceneArg};
+use crate::commands::millis;
+use crate::commands::trace::Backend;
+use dirt_eval::rays::{self, Camera, RayKind};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -169,13 +171,6 @@ fn per_ray(stats: &[RayStats]) -> (f64, f64, f64) {
     )
 }
 
-fn traversal_name(t: Traversal) -> &'static str {
-    match TraversalArg::from(t) {
-        TraversalArg::Linear => "linear",
-        TraversalArg::HiZ => "hiz",
-    }
-}
-
 fn kind_name(kind: RayKind) -> String {
     kind.to_possible_value()
         .map_or_else(String::new, |v| v.get_name().to_owned())
@@ -185,11 +180,16 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if args.rays == 0 {
         bail!("--rays must be at least 1");
     }
-    let scene = open_scene(&args.scene.scene)?;
+    let scene = args.scene.open()?;
     let tris = &scene.triangles;
-    let rays = raygen::generate(tris, scene_camera(&scene), args.kind, args.rays, args.seed)
-        .map_err(anyhow::Error::msg)
-        .with_context(|| format!("cannot make rays for scene {}", scene.name))?;
+    let rays = rays::generate(
+        tris,
+        Camera::of_scene(&scene),
+        args.kind,
+        args.rays,
+        args.seed,
+    )
+    .with_context(|| format!("cannot make rays for scene {}", scene.name))?;
     let params = args.ads.params();
     params
         .validate()
@@ -282,13 +282,13 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             nodes: ads.lists.ids.len() as u64,
         });
         for (slot, traversal) in cpu_results.iter_mut().zip(TRAVERSALS) {
-            eprintln!("cpu: trace {} x {k}", traversal_name(traversal));
+            eprintln!("cpu: trace {} x {k}", Traversal::name(traversal));
             let (ms, hits) = timed(k, || Ok(dirt_cpu::trace(&ads, tris, &rays, traversal)))?;
             let (_, stats) = dirt_cpu::trace_with_stats(&ads, tris, &rays, traversal);
             let (tiles, buckets, tests) = per_ray(&stats);
             rows.push(Row {
                 backend: "cpu",
-                traversal: Some(traversal_name(traversal)),
+                traversal: Some(Traversal::name(traversal)),
                 build_ms: Some(total),
                 trace_ms: ms,
                 rays: rays.len(),
@@ -305,9 +305,9 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
 
     // GPU.
     let gpu_state = if backends.contains(&Backend::Gpu) {
-        match crate::open_gpu() {
+        match crate::gpu::open_gpu() {
             Ok(gpu) => {
-                eprintln!("{}", crate::gpu_line(&gpu));
+                eprintln!("{}", crate::gpu::gpu_line(&gpu));
                 let adapter = gpu.describe();
                 let exact = gpu.exact;
                 match bench_gpu(&gpu, tris, &params, &rays, k, &cpu_results, &vs_brute) {
@@ -403,7 +403,7 @@ fn bench_gpu(
     };
     let mut rows = Vec::new();
     for (cpu, traversal) in cpu_results.iter().zip(TRAVERSALS) {
-        eprintln!("gpu: trace {} x {k}", traversal_name(traversal));
+        eprintln!("gpu: trace {} x {k}", Traversal::name(traversal));
         let (ms, traced) = timed(k, || {
             dirt_gpu::trace::trace_report(gpu, &ads, rays, traversal).context("cannot trace")
         })?;
@@ -429,7 +429,7 @@ fn bench_gpu(
         let (tiles, buckets, tests) = per_ray(&stats);
         rows.push(Row {
             backend: "gpu",
-            traversal: Some(traversal_name(traversal)),
+            traversal: Some(Traversal::name(traversal)),
             build_ms: Some(total),
             trace_ms: ms,
             rays: rays.len(),
@@ -482,12 +482,12 @@ fn report_differences(
     }
     eprintln!(
         "gpu {}: {} ray(s) differ from cpu; the first {}:",
-        traversal_name(traversal),
+        Traversal::name(traversal),
         differ.len(),
         differ.len().min(SHOWN)
     );
     for &i in differ.iter().take(SHOWN) {
-        let row = crate::npy::row_from_ray(&rays[i]);
+        let row = dirt_cli::npy::row_from_ray(&rays[i]);
         let bits: Vec<String> = row.iter().map(|x| format!("{:08x}", x.to_bits())).collect();
         eprintln!("  ray {i}: {row:?} (words {})", bits.join(" "));
         eprintln!("    cpu   {}", hit_words(&cpu[i]));
@@ -510,7 +510,7 @@ fn report_stats_differences(traversal: Traversal, gpu: &[RayStats], cpu: &[RaySt
     }
     eprintln!(
         "gpu {}: {} ray(s) have statistics that differ from cpu; the first {}:",
-        traversal_name(traversal),
+        Traversal::name(traversal),
         differ.len(),
         differ.len().min(SHOWN)
     );

@@ -1,0 +1,154 @@
+//! `dirt trace`: a rays file in, the closest hit of every ray out, through
+//! DIRT on the CPU or the GPU, or brute force.
+
+use std::fmt;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use dirt_core::{BuildReport, Tracer, Traversal};
+use dirt_cpu::DirtCpu;
+use dirt_cpu::brute_force::Brute;
+use dirt_gpu::DirtGpu;
+use dirt_math::{Hit, Ray};
+
+use crate::args::{AdsArgs, SceneArg};
+use crate::commands::millis;
+use crate::gpu::{fallback_line, gpu_line, open_gpu};
+use dirt_cli::npy;
+
+#[derive(Debug, Args)]
+pub struct TraceArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    /// Rays: float32 .npy of shape (N, 8), rows `ox oy oz tmin dx dy dz tmax`, C order.
+    #[arg(long, value_name = "RAYS.npy")]
+    pub rays: PathBuf,
+    /// Where to write the hits: uint32 .npy of shape (N, 4), rows `prim, bits(t), bits(u), bits(v)`.
+    #[arg(long, value_name = "HITS.npy")]
+    pub out: PathBuf,
+    /// Which tracer runs the rays.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
+    #[command(flatten)]
+    pub ads: AdsArgs,
+    /// How the cpu and gpu backends walk the tiles a ray crosses.
+    #[arg(long, value_enum, default_value_t = Traversal::default())]
+    pub traversal: Traversal,
+}
+
+/// The tracer behind `dirt trace` and `dirt bench`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// DIRT on the CPU (dirt-cpu).
+    Cpu,
+    /// DIRT on the GPU (dirt-gpu, wgpu; set WGPU_BACKEND=vulkan). Without a usable
+    /// adapter it says so and runs the cpu backend, whose hits are the same bits.
+    Gpu,
+    /// Every ray against every triangle with the same triangle test: the ground truth.
+    Brute,
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
+            Backend::Brute => "brute",
+        })
+    }
+}
+
+pub fn trace(args: &TraceArgs) -> Result<()> {
+    let scene = args.scene.open()?;
+    let rays = npy::read_rays(&args.rays)?;
+    eprintln!(
+        "scene {}: {} triangles; {} rays from {}; backend {}",
+        scene.name,
+        scene.triangles.len(),
+        rays.len(),
+        args.rays.display(),
+        args.backend
+    );
+    let tris = &scene.triangles;
+    let gpu = match args.backend {
+        Backend::Gpu => match open_gpu() {
+            Ok(gpu) => {
+                eprintln!("{}", gpu_line(&gpu));
+                Some(gpu)
+            }
+            Err(reason) => {
+                eprintln!("{}", fallback_line(&reason));
+                None
+            }
+        },
+        _ => None,
+    };
+    // Brute force builds nothing, so it has no parameters (and no --auto).
+    let params = match args.backend {
+        Backend::Brute => None,
+        _ => Some(args.ads.params_for(&scene, 1_000_000)?),
+    };
+    let mut tracer: Box<dyn Tracer + '_> = match (params, &gpu) {
+        (None, _) => Box::new(Brute::default()),
+        (Some(p), Some(g)) => Box::new(DirtGpu::new(g, p, args.traversal)),
+        (Some(p), None) => Box::new(DirtCpu::new(p, args.traversal)),
+    };
+    let start = Instant::now();
+    let built = tracer.build(tris).with_context(|| {
+        format!(
+            "cannot build the acceleration structure of {} with {} ({params:?})",
+            scene.name,
+            tracer.name()
+        )
+    })?;
+    let build_time = start.elapsed();
+    let start = Instant::now();
+    let mut hits = vec![Hit::MISS; rays.len()];
+    let report = tracer
+        .trace_into(&rays, &mut hits, None)
+        .with_context(|| format!("cannot trace ({})", tracer.name()))?;
+    let trace_time = start.elapsed();
+    if report.finished_elsewhere > 0 {
+        eprintln!(
+            "gpu: {} rays spent their GPU work budget and were finished by the CPU reference",
+            report.finished_elsewhere
+        );
+    }
+    npy::write_hits(&args.out, &hits)?;
+    print_build(&built, build_time);
+    print_trace(&rays, &hits, trace_time);
+    eprintln!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn print_build(built: &BuildReport, total: Duration) {
+    if built.stages.is_empty() {
+        eprintln!("build: none (brute force)");
+        return;
+    }
+    let stages: Vec<String> = built
+        .stages
+        .iter()
+        .map(|(name, d)| format!("{name} {:.3} ms", millis(*d)))
+        .collect();
+    eprintln!("build: {:.3} ms ({})", millis(total), stages.join(", "));
+}
+
+fn print_trace(rays: &[Ray], hits: &[Hit], trace_time: Duration) {
+    let secs = trace_time.as_secs_f64();
+    let mrays = if secs > 0.0 {
+        rays.len() as f64 / secs / 1e6
+    } else {
+        f64::INFINITY
+    };
+    eprintln!("trace: {:.3} ms, {mrays:.3} Mrays/s", millis(trace_time));
+    let hit_count = hits.iter().filter(|h| h.is_hit()).count();
+    let percent = if rays.is_empty() {
+        0.0
+    } else {
+        100.0 * hit_count as f64 / rays.len() as f64
+    };
+    eprintln!("hits: {hit_count} of {} rays ({percent:.2} %)", rays.len());
+}
