@@ -301,40 +301,6 @@ pub fn grid(n: u32, size: f32, z0: f32) -> Vec<Triangle> {
     out
 }
 
-/// The shared GPU of the GPU tests, or `None` (said loudly) when no adapter
-/// exists. With `DIRT_REQUIRE_GPU=1` (set by `.ci/run`) a missing adapter, or
-/// one that is not lavapipe, fails instead.
-pub fn gpu() -> Option<&'static dirt_gpu::Gpu> {
-    use std::sync::OnceLock;
-    static GPU: OnceLock<Option<dirt_gpu::Gpu>> = OnceLock::new();
-    let required = std::env::var("DIRT_REQUIRE_GPU").is_ok_and(|v| v == "1");
-    let g = GPU.get_or_init(|| match dirt_gpu::Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) => {
-            assert!(!required, "DIRT_REQUIRE_GPU=1 but: {e}");
-            eprintln!("\n*** SKIPPING GPU TEST: {e} ***\n");
-            None
-        }
-    });
-    if let Some(g) = g {
-        // Bits are only promised on the CI device.
-        if !g.is_llvmpipe() || !g.exact {
-            assert!(
-                !required,
-                "DIRT_REQUIRE_GPU=1 but the adapter is {} (NoContraction path: {}), not llvmpipe with it",
-                g.describe(),
-                g.exact
-            );
-            eprintln!(
-                "\n*** SKIPPING BIT-EXACT GPU TEST: adapter {} is not llvmpipe with the NoContraction path ***\n",
-                g.describe()
-            );
-            return None;
-        }
-    }
-    g.as_ref()
-}
-
 /// The reduced matrix of the robustness cases: views {cube, single} × three
 /// (B, S) pairs; `trace` is then run with both traversals. `center` is used for
 /// the cube only (a single view with a centre sees only its frustum).
@@ -414,9 +380,10 @@ impl GpuDiff {
 }
 
 /// Compares GPU DIRT with CPU DIRT: Hi-Z levels, id lists as sets, and hits
-/// and statistics with both traversals. `None` when there is no GPU.
+/// and statistics with both traversals. `None` when the running test is
+/// skipped: a bit comparison needs [`dirt_gpu::testing::exact_gpu`].
 pub fn gpu_differences(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> Option<GpuDiff> {
-    let g = gpu()?;
+    let g = dirt_gpu::testing::exact_gpu(&dirt_gpu::testing::current_test_name())?;
     let cpu = Ads::build(tris, params).expect("cpu build");
     let ads = dirt_gpu::GpuAds::build(g, tris, params).expect("gpu build");
     let mut out = GpuDiff::default();
@@ -462,7 +429,8 @@ pub fn gpu_differences(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> O
     Some(out)
 }
 
-/// Asserts GPU == CPU in everything [`gpu_differences`] compares; skips without a GPU.
+/// Asserts GPU == CPU in everything [`gpu_differences`] compares; skipped (and
+/// said) off the exact path.
 pub fn assert_gpu_equals_cpu(name: &str, tris: &[Triangle], rays: &[Ray], params: &AdsParams) {
     if let Some(d) = gpu_differences(tris, rays, params) {
         assert!(

@@ -4,8 +4,9 @@
 use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_cpu::{Ads, trace_with_stats};
 use dirt_gpu::GpuAds;
+use dirt_gpu::testing::{any_gpu, current_test_name, exact_gpu};
 use dirt_math::{Ray, Triangle, Vec3};
-use dirt_tests::{Rng, adversarial_rays, gpu};
+use dirt_tests::{Rng, adversarial_rays};
 use proptest::prelude::*;
 
 fn random_scene(seed: u64, n: usize, scale: f32) -> Vec<Triangle> {
@@ -36,7 +37,9 @@ fn sorted_lists(l: &dirt_core::IdLists) -> Vec<Vec<u32>> {
 }
 
 fn compare(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> Result<(), TestCaseError> {
-    let Some(g) = gpu() else { return Ok(()) };
+    let Some(g) = exact_gpu(&current_test_name()) else {
+        return Ok(());
+    };
     let cpu = Ads::build(tris, params).expect("cpu build");
     let ads = GpuAds::build(g, tris, params).expect("gpu build");
     let hiz = ads.read_hiz(g).expect("read hi-z");
@@ -136,7 +139,9 @@ fn builtin_scenes_gpu_equals_cpu() {
 
 #[test]
 fn empty_scene_builds_and_misses() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = any_gpu("empty_scene_builds_and_misses") else {
+        return;
+    };
     let ads = GpuAds::build(g, &[], &AdsParams::default()).expect("empty scene builds");
     let rays = [Ray::new(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY)];
     let (h, _) = dirt_gpu::trace::trace(g, &ads, &rays, Traversal::Linear).expect("trace");
@@ -148,7 +153,9 @@ fn empty_scene_builds_and_misses() {
 /// reference, with the same hit and statistics; nothing is silently wrong.
 #[test]
 fn rays_over_the_gpu_work_budget_are_finished_exactly() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = exact_gpu("rays_over_the_gpu_work_budget_are_finished_exactly") else {
+        return;
+    };
     let mut tris = Vec::new();
     for k in 0..1200 {
         tris.extend(dirt_tests::grid(1, 2.0, k as f32 * 1e-3));
@@ -193,7 +200,9 @@ fn rays_over_the_gpu_work_budget_are_finished_exactly() {
 /// with the sizes in the message: never truncated.
 #[test]
 fn oversized_structure_is_a_clear_error() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = any_gpu("oversized_structure_is_a_clear_error") else {
+        return;
+    };
     let tris = random_scene(1, 10, 1.0);
     let params = AdsParams {
         views: ViewsKind::Cube,

@@ -1,12 +1,15 @@
 //! Single shared functions, GPU (WGSL) against CPU (dirt-math), bit for bit.
 
+use dirt_gpu::testing::exact_gpu;
 use dirt_math::triangle::{RayShear, intersect};
 use dirt_math::{Ray, Triangle, Vec3};
-use dirt_tests::{Rng, adversarial_rays, gpu};
+use dirt_tests::{Rng, adversarial_rays};
 
 #[test]
 fn div_cr_equals_cpu_division() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = exact_gpu("div_cr_equals_cpu_division") else {
+        return;
+    };
     let mut rng = Rng(3);
     let n = 1u32 << 20;
     let mut input = Vec::with_capacity(2 * n as usize);
@@ -28,7 +31,9 @@ fn div_cr_equals_cpu_division() {
 
 #[test]
 fn triangle_test_equals_cpu() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = exact_gpu("triangle_test_equals_cpu") else {
+        return;
+    };
     let mut rng = Rng(4);
     let mut tris = Vec::new();
     for _ in 0..64 {
@@ -100,7 +105,9 @@ fn hits_seen(out: &[u32], n: usize) -> usize {
 fn view_clip_and_walk_setup_equal_cpu() {
     use dirt_math::clip::clip_ray_to_view;
     use dirt_math::dda::{dilation, tile_xy};
-    let Some(g) = gpu() else { return };
+    let Some(g) = exact_gpu("view_clip_and_walk_setup_equal_cpu") else {
+        return;
+    };
     let mut bad = Vec::new();
     for (si, name) in ["cornell", "foliage"].iter().enumerate() {
         let scene = dirt_scene::builtin(name).expect("built-in");

@@ -3,8 +3,9 @@
 
 use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_cpu::{Ads, brute_force, trace_with_stats};
+use dirt_gpu::testing::exact_gpu;
 use dirt_math::{Triangle, Vec3};
-use dirt_tests::{adversarial_rays, gpu, grid, uv_sphere};
+use dirt_tests::{adversarial_rays, grid, uv_sphere};
 
 /// Geometry on the +X and +Y sides of a cube centred at (1, 1, 0): the bounds
 /// reach every face's frustum, but no triangle reaches the -X, -Y, +Z, -Z faces.
@@ -80,7 +81,7 @@ fn leaving_views_out_changes_no_hit() {
 
 #[test]
 fn gpu_leaves_out_the_same_views_and_agrees_bit_for_bit() {
-    let Some(gpu) = gpu() else {
+    let Some(gpu) = exact_gpu("gpu_leaves_out_the_same_views_and_agrees_bit_for_bit") else {
         return;
     };
     let (tris, params) = lopsided();

@@ -5,12 +5,13 @@
 
 use dirt_core::{AdsParams, Tracer, Traversal};
 use dirt_cpu::DirtCpu;
+use dirt_gpu::testing::exact_gpu;
 use dirt_gpu::{DirtGpu, GpuAds};
 use dirt_math::{Triangle, Vec3};
 use dirt_render::reference::Reference;
 use dirt_render::trace::Recording;
 use dirt_render::{Camera, Mode, Renderer, Settings};
-use dirt_tests::{Rng, adversarial_rays, gpu};
+use dirt_tests::{Rng, adversarial_rays};
 
 fn soup(seed: u64, n: usize) -> Vec<Triangle> {
     let mut rng = Rng(seed);
@@ -74,7 +75,9 @@ fn reference_equals_brute_force_on_adversarial_rays() {
 
 #[test]
 fn gpu_render_equals_cpu_render_hit_for_hit_and_bit_for_bit() {
-    let Some(g) = gpu() else { return };
+    let Some(g) = exact_gpu("gpu_render_equals_cpu_render_hit_for_hit_and_bit_for_bit") else {
+        return;
+    };
     let scene = dirt_scene::open("cornell").expect("cornell");
     let s = Settings {
         width: 24,

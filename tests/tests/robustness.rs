@@ -4,14 +4,16 @@
 //! Every geometric case asserts that CPU DIRT equals brute force bit for bit
 //! over views {cube, single} × traversal {linear, hiz} × three (B, S) pairs
 //! (`robust_matrix`); a representative subset also asserts GPU == CPU on
-//! lavapipe (skipped without an adapter unless `DIRT_REQUIRE_GPU=1`).
+//! lavapipe (`dirt_gpu::testing`: skipped, and said why, off the exact path
+//! unless `DIRT_REQUIRE_GPU=1`).
 
 use dirt_core::{AdsParams, CoreError, Traversal, ViewsKind};
 use dirt_cpu::{Ads, CpuError, brute_force, trace};
+use dirt_gpu::testing::any_gpu;
 use dirt_math::{Aabb, Hit, Ray, RayProblem, Triangle, Vec3};
 use dirt_tests::{
-    Mesh, Rng, adversarial_rays, assert_exact, assert_gpu_equals_cpu, box_mesh, gpu,
-    gpu_differences, grid, hit_count, icosphere, robust_matrix,
+    Mesh, Rng, adversarial_rays, assert_exact, assert_gpu_equals_cpu, box_mesh, gpu_differences,
+    grid, hit_count, icosphere, robust_matrix,
 };
 use glam::Vec3Swizzles;
 
@@ -1007,7 +1009,7 @@ fn nan_inf_and_zero_direction_rays_miss_everywhere() {
     assert!(!tiny[1].is_hit() && !tiny[2].is_hit(), "{tiny:?}");
     assert_exact("bad rays", &tris, &rays, &robust_matrix(16, None));
     assert_gpu_equals_cpu("bad rays", &tris, &rays, &robust_matrix(16, None)[0]);
-    if let Some(g) = gpu() {
+    if let Some(g) = any_gpu("nan_inf_and_zero_direction_rays_miss_everywhere") {
         let ads = dirt_gpu::GpuAds::build(g, &tris, &AdsParams::default()).expect("build");
         let (h, _) = dirt_gpu::trace::trace(g, &ads, &rays, Traversal::Linear).expect("trace");
         assert!(h[bad].iter().all(|h| h.bits() == Hit::MISS.bits()));
@@ -1050,7 +1052,7 @@ fn nan_and_inf_vertices_are_refused() {
         }
         let hits = brute_force::trace(&tris, &rays);
         assert!(hits.iter().all(|h| h.prim != index as u32), "{bad}");
-        if let Some(g) = gpu() {
+        if let Some(g) = any_gpu("nan_and_inf_vertices_are_refused") {
             match dirt_gpu::GpuAds::build(g, &tris, &AdsParams::default()) {
                 Err(dirt_gpu::GpuError::Params(CoreError::NonFiniteTriangle { index: i })) => {
                     assert_eq!(i, index)
@@ -1083,7 +1085,7 @@ fn empty_scene_misses_everywhere() {
 /// `GpuError::TooLarge` naming it, and traces rays in chunks otherwise.
 #[test]
 fn scenes_beyond_gpu_limits_are_refused_by_name() {
-    if gpu().is_none() {
+    if any_gpu("scenes_beyond_gpu_limits_are_refused_by_name").is_none() {
         return;
     }
     let mut g = dirt_gpu::Gpu::new().expect("a second context");

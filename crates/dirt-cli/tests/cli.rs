@@ -544,10 +544,30 @@ fn dirt_ok_env(args: &[&str], env: &[(&str, &str)]) -> (String, String) {
 const GPU_LINE: &str = "gpu adapter:";
 const FALLBACK_LINE: &str = "falling back to the CPU backend";
 
-/// `dirt trace --backend gpu` writes the bytes `--backend cpu` writes: on a GPU
-/// by the bit-exact contract (NoContraction path), without one because it
-/// falls back to the CPU backend and says so. With `DIRT_REQUIRE_GPU=1` (CI)
-/// the GPU must be used.
+/// The adapter the `dirt` binary reports on stderr, as the facts
+/// `dirt_gpu::testing` decides on, or the reason it gives for using none.
+fn reported_adapter(log: &str) -> Result<dirt_gpu::testing::AdapterFacts, String> {
+    if let Some(line) = log.lines().find_map(|l| l.strip_prefix(GPU_LINE)) {
+        let (description, path) = line.trim().rsplit_once("; ").unwrap_or((line.trim(), ""));
+        return Ok(dirt_gpu::testing::AdapterFacts {
+            description: description.to_owned(),
+            llvmpipe: description.contains("llvmpipe"),
+            exact: path.starts_with("exact"),
+        });
+    }
+    Err(log
+        .lines()
+        .find(|l| l.contains(FALLBACK_LINE))
+        .unwrap_or("the log names no adapter")
+        .to_owned())
+}
+
+/// `dirt trace --backend gpu` writes the bytes `--backend cpu` writes: on the
+/// exact path by the bit-exact contract, without an adapter because it falls
+/// back to the CPU backend and says so. Whether the GPU comparison runs, is
+/// skipped (and says why) or fails (`DIRT_REQUIRE_GPU=1`) is
+/// `dirt_gpu::testing`'s rule for bit comparisons, applied to the adapter the
+/// binary reports.
 #[test]
 fn gpu_hits_equal_cpu_hits_byte_for_byte() {
     let dir = TestDir::new("gpu");
@@ -582,14 +602,17 @@ fn gpu_hits_equal_cpu_hits_byte_for_byte() {
         used_gpu != log.contains(FALLBACK_LINE),
         "the log names the adapter or the fallback, one of them:\n{log}"
     );
-    if std::env::var("DIRT_REQUIRE_GPU").is_ok_and(|v| v == "1") {
-        assert!(used_gpu, "DIRT_REQUIRE_GPU=1 but:\n{log}");
-    }
+    let adapter = reported_adapter(&log);
+    let exact = dirt_gpu::testing::check(
+        "gpu_hits_equal_cpu_hits_byte_for_byte",
+        dirt_gpu::testing::Need::Exact,
+        adapter.as_ref().map_err(String::as_str),
+    );
     for word in ["backend gpu", "build:", "trace:", "Mrays/s", "hits:"] {
         assert!(log.contains(word), "trace log lacks {word:?}:\n{log}");
     }
-    if used_gpu && log.contains("not exact") {
-        eprintln!("\n*** SKIPPING BYTE COMPARISON: the adapter promises no bits:\n{log}***\n");
+    // Skipped on an adapter off the exact path; the CPU fallback's bytes are compared.
+    if used_gpu && !exact {
         return;
     }
     assert!(

@@ -9,6 +9,12 @@
 //!
 //! On lavapipe (the CI device) every output equals the CPU reference's to the
 //! bit: depth bounds, Hi-Z levels, list contents (as sets) and hits.
+//!
+//! Tests in every crate get their GPU from [`testing`]: [`testing::any_gpu`]
+//! for structure, sizes, errors and the absence of panics (any adapter,
+//! hardware included), [`testing::exact_gpu`] for bit-for-bit comparisons with
+//! the CPU (only the exact path on llvmpipe). A skip says which test, which
+//! adapter and why; `DIRT_REQUIRE_GPU=1` (CI) makes it a failure.
 
 mod context;
 pub mod fill_depth;
@@ -17,6 +23,7 @@ pub mod mip_depth;
 pub mod params;
 pub mod selftest;
 pub mod spirv;
+pub mod testing;
 pub mod trace;
 pub mod tracer;
 
