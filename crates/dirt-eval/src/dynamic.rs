@@ -2,18 +2,16 @@
 //! frame (a travelling wave), so every structure must be rebuilt each frame.
 //! Per frame: rebuild + trace of the same camera rays, DIRT (CPU, default
 //! setting, linear traversal) and each peer, with brute force on a prefix of
-//! the rays as the truth.
+//! the rays as the truth. Every tracer is measured by [`crate::measure`].
 
-use std::time::Instant;
-
-use dirt_core::{AdsParams, Traversal};
-use dirt_cpu::Ads;
+use dirt_core::{AdsParams, Tracer, Traversal};
+use dirt_cpu::DirtCpu;
 use dirt_math::{Ray, Triangle, Vec3};
 use indicatif::ProgressBar;
 use serde::Serialize;
 
-use crate::harness::{median, ms};
-use crate::peers::PeerKind;
+use crate::measure::{self, StatsPass, median};
+use crate::peers::{Peer, unavailable};
 use crate::rays::{self, Camera, RayKind};
 use crate::{EvalError, Match, compare};
 
@@ -79,77 +77,94 @@ fn camera() -> Option<Camera> {
     )
 }
 
-/// Runs the frames; peers that are not built in are noted and skipped.
+/// A tracer of the dynamic scene, with the name of its rows and how its hits are judged.
+struct Entry {
+    backend: &'static str,
+    tracer: Box<dyn Tracer>,
+    how: Match,
+    /// A peer: skipped (and noted once) when its library cannot do the work.
+    peer: bool,
+    skipped: bool,
+}
+
+/// Runs the frames; peers that cannot start or build are noted and skipped.
 pub fn run(
     cfg: &DynamicConfig,
-    peers: &[PeerKind],
+    peers: &[Peer],
     threads: usize,
     seed: u64,
     pb: &ProgressBar,
     notes: &mut Vec<String>,
 ) -> Result<Vec<DynamicRow>, EvalError> {
+    let mut entries = vec![Entry {
+        backend: "dirt-cpu",
+        tracer: Box::new(DirtCpu::new(AdsParams::default(), Traversal::Linear)),
+        how: Match::Bits,
+        peer: false,
+        skipped: false,
+    }];
+    for peer in peers {
+        match (peer.make)(threads) {
+            Ok(tracer) => entries.push(Entry {
+                backend: peer.name,
+                tracer,
+                how: Match::PEER,
+                peer: true,
+                skipped: false,
+            }),
+            Err(e) if unavailable(&e) => notes.push(format!("dynamic scene: {e}")),
+            Err(source) => return Err(build_err(source)),
+        }
+    }
     let mut rows = Vec::new();
-    let mut skip = vec![false; peers.len()];
     for frame in 0..cfg.frames {
         let tris = wave_grid(cfg.grid, 0.35 * frame as f32);
         let rays: Vec<Ray> = rays::generate(&tris, camera(), RayKind::Camera, cfg.rays, seed)?;
         let n = TRUTH_RAYS.min(rays.len());
         let truth = dirt_cpu::brute_force::trace(&tris, &rays[..n]);
-        let row = |backend: &str, build: f64, trace: f64, d: crate::Disagreement| DynamicRow {
-            backend: backend.into(),
-            frame,
-            triangles: tris.len(),
-            rays: rays.len(),
-            build_ms: build,
-            trace_ms: trace,
-            frame_ms: build + trace,
-            compared: d.compared,
-            differ: d.differ,
-            differ_prim: d.differ_prim,
-        };
-
-        let start = Instant::now();
-        let ads = Ads::build(&tris, &AdsParams::default()).map_err(|source| EvalError::Build {
-            scene: "wave".into(),
-            source,
-        })?;
-        let build = ms(start.elapsed());
-        let start = Instant::now();
-        let hits = dirt_cpu::trace(&ads, &tris, &rays, Traversal::Linear);
-        let trace = ms(start.elapsed());
-        rows.push(row(
-            "dirt-cpu",
-            build,
-            trace,
-            compare(&hits, &truth, Match::Bits),
-        ));
-
-        for (k, peer) in peers.iter().enumerate() {
-            if skip[k] {
-                continue;
-            }
-            let (p, build) = match peer.build(&tris, threads) {
+        for e in entries.iter_mut().filter(|e| !e.skipped) {
+            let built = measure::build(e.tracer.as_mut(), &tris, 1);
+            let built = match built {
                 Ok(b) => b,
-                Err(EvalError::PeerUnavailable(m)) => {
-                    notes.push(format!("dynamic scene: {m}"));
-                    skip[k] = true;
+                Err(err) if e.peer && unavailable(&err) => {
+                    notes.push(format!("dynamic scene: {err}"));
+                    e.skipped = true;
                     continue;
                 }
-                Err(e) => return Err(e),
+                Err(source) => return Err(build_err(source)),
             };
-            let start = Instant::now();
-            let hits = p.trace(&rays);
-            let trace = ms(start.elapsed());
-            rows.push(row(
-                peer.name(),
-                ms(build),
-                trace,
-                compare(&hits, &truth, Match::PEER),
-            ));
+            let traced = measure::trace(e.tracer.as_mut(), &rays, 1, StatsPass::Prefix(0))
+                .map_err(|source| EvalError::Trace {
+                    scene: SCENE.into(),
+                    source,
+                })?;
+            let d = compare(&traced.hits, &truth, e.how);
+            rows.push(DynamicRow {
+                backend: e.backend.to_string(),
+                frame,
+                triangles: tris.len(),
+                rays: rays.len(),
+                build_ms: built.build_ms,
+                trace_ms: traced.trace_ms,
+                frame_ms: built.build_ms + traced.trace_ms,
+                compared: d.compared,
+                differ: d.differ,
+                differ_prim: d.differ_prim,
+            });
         }
         pb.inc(1);
     }
     Ok(rows)
+}
+
+/// The name of the deforming scene in errors.
+const SCENE: &str = "wave";
+
+fn build_err(source: dirt_core::CoreError) -> EvalError {
+    EvalError::Build {
+        scene: SCENE.into(),
+        source,
+    }
 }
 
 /// Median per-frame figures of one backend: `(build, trace, frame)` in ms.

@@ -1,20 +1,28 @@
 //! The evaluation run: scenes × parameter grid × ray types × traversals, the
 //! peers and the GPU backend beside DIRT on the CPU, all against brute force.
+//!
+//! Every tracer is measured through [`crate::measure`] as a `&mut dyn Tracer`;
+//! the peers come from [`crate::peers::available`] (where a new tracer's one
+//! line goes). This module uses [`crate::dynamic`], [`crate::leave_out`] and
+//! [`crate::renders`]; they never use it.
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use dirt_core::{AdsParams, Traversal, ViewsKind};
-use dirt_cpu::Ads;
-use dirt_math::{Hit, Ray, RayStats, Triangle};
+use dirt_core::{AdsParams, CoreError, Tracer, Traversal, ViewsKind};
+use dirt_cpu::brute_force::Brute;
+use dirt_cpu::{Ads, DirtCpu};
+use dirt_gpu::DirtGpu;
+use dirt_math::{Hit, Ray, Triangle};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 
 use crate::dynamic::{DynamicConfig, DynamicRow};
-use crate::peers::PeerKind;
+use crate::measure::{self, BuildRow, PerRay, Setting, StatsPass, Structure, Subject, TraceRow};
+use crate::peers::Peer;
 use crate::rays::{self, RayType};
 use crate::renders::{RenderConfig, RenderReference, RenderRow};
-use crate::{Disagreement, EvalError, Match, compare};
+use crate::{EvalError, Match, compare};
 
 /// One point of the parameter grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,15 +47,14 @@ impl GridPoint {
         }
     }
 
+    /// What the reports call it.
+    pub fn setting(&self) -> Setting {
+        Setting::dirt(&self.params, self.at_camera)
+    }
+
     /// A short name, e.g. `cube r128 B8 S1`.
     pub fn label(&self) -> String {
-        let p = &self.params;
-        let views = match (p.views, self.at_camera) {
-            (ViewsKind::Cube, _) => "cube",
-            (ViewsKind::Single, false) => "single",
-            (ViewsKind::Single, true) => "single@camera",
-        };
-        format!("{views} r{} B{} S{}", p.resolution, p.buckets, p.tile)
+        self.setting().label
     }
 }
 
@@ -78,7 +85,8 @@ pub struct EvalConfig {
     /// Builds and traces per measurement; medians are reported.
     pub repeat: u32,
     pub gpu: Option<GpuConfig>,
-    pub peers: Vec<PeerKind>,
+    /// The peers measured beside DIRT (default: [`crate::peers::available`]).
+    pub peers: Vec<Peer>,
     pub dynamic: Option<DynamicConfig>,
     pub render: Option<RenderConfig>,
     pub seed: u64,
@@ -118,7 +126,7 @@ impl EvalConfig {
             truth_tests: 20_000_000,
             repeat: 1,
             gpu: None,
-            peers: PeerKind::available(),
+            peers: crate::peers::available(),
             dynamic: Some(DynamicConfig {
                 grid: 32,
                 frames: 3,
@@ -171,7 +179,7 @@ impl EvalConfig {
                 max_nodes: 1_500_000,
                 rays: 2_000,
             }),
-            peers: PeerKind::available(),
+            peers: crate::peers::available(),
             dynamic: Some(DynamicConfig {
                 grid: 128,
                 frames: 8,
@@ -280,57 +288,6 @@ fn utc_now() -> String {
     )
 }
 
-/// One structure build.
-#[derive(Clone, Debug, Serialize)]
-pub struct BuildRow {
-    pub scene: String,
-    pub triangles: usize,
-    /// `dirt-cpu`, `dirt-gpu`, `obvhs`, `embree`.
-    pub backend: String,
-    /// Grid label (empty for peers).
-    pub setting: String,
-    pub views: String,
-    pub resolution: Option<u32>,
-    pub buckets: Option<u32>,
-    pub tile: Option<u32>,
-    pub fill_depth_ms: Option<f64>,
-    pub mip_depth_ms: Option<f64>,
-    pub fill_primitives_ms: Option<f64>,
-    /// Median wall time of the whole build call.
-    pub build_ms: f64,
-    pub nodes: Option<u64>,
-    pub depth_hiz_bytes: Option<u64>,
-    pub depth_hiz_model_bytes: Option<f64>,
-    pub id_buffer_bytes: Option<u64>,
-    pub id_buffer_model_bytes: Option<f64>,
-    pub total_bytes: Option<u64>,
-}
-
-/// One trace: a backend, a setting, a traversal and a ray type.
-#[derive(Clone, Debug, Serialize)]
-pub struct TraceRow {
-    pub scene: String,
-    pub triangles: usize,
-    pub backend: String,
-    pub setting: String,
-    pub traversal: String,
-    pub ray_type: String,
-    pub rays: usize,
-    /// Median wall time of tracing all `rays`.
-    pub trace_ms: f64,
-    pub mrays_per_s: f64,
-    /// Per ray, over the compared rays (DIRT only).
-    pub tiles_per_ray: Option<f64>,
-    pub buckets_per_ray: Option<f64>,
-    pub tests_per_ray: Option<f64>,
-    /// Rays of the first `compared` compared with brute force.
-    pub compared: usize,
-    pub differ: usize,
-    pub differ_prim: usize,
-    /// GPU: rays the CPU reference finished (work budget spent).
-    pub cpu_finished: Option<usize>,
-}
-
 /// Everything one run measured.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct EvalResults {
@@ -365,63 +322,6 @@ pub struct SceneInfo {
     pub compared: usize,
 }
 
-pub(crate) fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
-}
-
-pub(crate) fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
-}
-
-/// Runs `f` `k` times; the median wall time in ms and the last result.
-pub(crate) fn timed<T, E>(k: u32, mut f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
-    let mut times = Vec::new();
-    let mut last;
-    loop {
-        let start = Instant::now();
-        last = f()?;
-        times.push(ms(start.elapsed()));
-        if times.len() >= k.max(1) as usize {
-            break;
-        }
-    }
-    Ok((median(times), last))
-}
-
-pub(crate) fn traversal_name(t: Traversal) -> &'static str {
-    match t {
-        Traversal::Linear => "linear",
-        Traversal::HiZ => "hiz",
-    }
-}
-
-fn per_ray(stats: &[RayStats]) -> (f64, f64, f64) {
-    let n = stats.len().max(1) as f64;
-    let sum = |f: fn(&RayStats) -> u32| stats.iter().map(|s| u64::from(f(s))).sum::<u64>() as f64;
-    (
-        sum(|s| s.tiles) / n,
-        sum(|s| s.buckets) / n,
-        sum(|s| s.tests) / n,
-    )
-}
-
-pub(crate) fn mrays(rays: usize, ms: f64) -> f64 {
-    if ms > 0.0 {
-        rays as f64 / ms / 1e3
-    } else {
-        f64::INFINITY
-    }
-}
-
 /// The progress bar: drawn only on a terminal (indicatif hides itself otherwise).
 fn progress_bar(len: u64, enabled: bool) -> ProgressBar {
     if !enabled {
@@ -445,6 +345,72 @@ struct Prepared {
     camera_eye: Option<dirt_math::Vec3>,
     /// List nodes of the default structure.
     nodes: usize,
+}
+
+impl Prepared {
+    /// Rays per type compared with brute force (the length of each truth).
+    fn compared(&self) -> usize {
+        self.truth.first().map_or(0, Vec::len)
+    }
+
+    /// What a row of `backend` in `setting` on this scene is about.
+    fn subject(&self, backend: &str, setting: Setting) -> Subject {
+        Subject {
+            scene: self.name.clone(),
+            triangles: self.tris.len(),
+            backend: backend.to_string(),
+            setting,
+            traversal: None,
+        }
+    }
+
+    fn build_err(&self) -> impl FnOnce(CoreError) -> EvalError + '_ {
+        |source| EvalError::Build {
+            scene: self.name.clone(),
+            source,
+        }
+    }
+
+    fn trace_err(&self) -> impl FnOnce(CoreError) -> EvalError + '_ {
+        |source| EvalError::Trace {
+            scene: self.name.clone(),
+            source,
+        }
+    }
+}
+
+/// How one tracer's rays are traced and judged.
+#[derive(Clone, Copy, Debug)]
+struct Plan {
+    /// Trace only the first `n` rays of each type.
+    rays: Option<usize>,
+    repeat: u32,
+    stats: StatsPass,
+    /// Statistics known without counting (brute force: every ray tests every triangle).
+    per_ray: Option<PerRay>,
+    how: Match,
+}
+
+/// Traces every ray type of `prep` through `tracer` as `plan` says, one row
+/// per type, judged against brute force.
+fn trace_types(
+    prep: &Prepared,
+    tracer: &mut dyn Tracer,
+    subject: &Subject,
+    plan: Plan,
+    res: &mut EvalResults,
+) -> Result<(), EvalError> {
+    for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
+        let rays = &rays[..plan.rays.unwrap_or(rays.len()).min(rays.len())];
+        let mut m =
+            measure::trace(tracer, rays, plan.repeat, plan.stats).map_err(prep.trace_err())?;
+        if let Some(p) = plan.per_ray {
+            m.per_ray = p;
+        }
+        let d = compare(&m.hits, truth, plan.how);
+        res.traces.push(TraceRow::new(subject, ty.name(), &m, d));
+    }
+    Ok(())
 }
 
 /// Runs the whole evaluation.
@@ -514,33 +480,19 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
             name: prep.name.clone(),
             spec: spec.clone(),
             triangles: prep.tris.len(),
-            compared: prep.truth.first().map_or(0, Vec::len),
+            compared: prep.compared(),
         });
-        // Brute force itself, for scale.
-        for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
-            let n = truth.len();
-            let (t_ms, _) = timed::<_, EvalError>(1, || {
-                Ok(dirt_cpu::brute_force::trace(&prep.tris, &rays[..n]))
-            })?;
-            res.traces.push(TraceRow {
-                scene: prep.name.clone(),
-                triangles: prep.tris.len(),
-                backend: "brute".into(),
-                setting: String::new(),
-                traversal: String::new(),
-                ray_type: ty.to_string(),
-                rays: n,
-                trace_ms: t_ms,
-                mrays_per_s: mrays(n, t_ms),
-                tiles_per_ray: None,
-                buckets_per_ray: None,
-                tests_per_ray: Some(prep.tris.len() as f64),
-                compared: n,
-                differ: 0,
-                differ_prim: 0,
-                cpu_finished: None,
-            });
-        }
+        // Brute force itself, for scale, on the compared rays.
+        let mut brute = Brute::new(&prep.tris);
+        let plan = Plan {
+            rays: Some(prep.compared()),
+            repeat: 1,
+            stats: StatsPass::Prefix(0),
+            per_ray: Some(PerRay::every_triangle(prep.tris.len())),
+            how: Match::Bits,
+        };
+        let subject = prep.subject("brute", Setting::default());
+        trace_types(&prep, &mut brute, &subject, plan, &mut res)?;
         for point in &cfg.grid {
             pb.set_message(format!("{label}: dirt-cpu {}", point.label()));
             let mut point = *point;
@@ -583,12 +535,8 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
         res.leave_out.extend(crate::leave_out::run(&input)?);
         pb.inc(1);
         for peer in &cfg.peers {
-            pb.set_message(format!("{label}: {}", peer.name()));
-            match measure_peer(&prep, *peer, threads, cfg, &mut res) {
-                Ok(()) => {}
-                Err(EvalError::PeerUnavailable(m)) => res.notes.push(m),
-                Err(e) => return Err(e),
-            }
+            pb.set_message(format!("{label}: {}", peer.name));
+            measure_peer(&prep, peer, threads, cfg, &mut res)?;
             pb.inc(1);
         }
         if let (Some(g), Some(gc)) = (&gpu, cfg.gpu) {
@@ -641,7 +589,7 @@ fn prepare(
     let reference =
         Ads::build(&tris, &AdsParams::default()).map_err(|source| EvalError::Build {
             scene: label.to_string(),
-            source,
+            source: source.into(),
         })?;
     let rays = rays::table1(scene, cfg.rays, cfg.seed, |r| {
         dirt_cpu::trace(&reference, &tris, r, Traversal::Linear)
@@ -669,137 +617,55 @@ fn measure_cpu(
     cfg: &EvalConfig,
     res: &mut EvalResults,
 ) -> Result<(), EvalError> {
-    let mut stages = (Vec::new(), Vec::new(), Vec::new());
-    let (build_ms, ads) = timed(cfg.repeat, || {
-        let a = Ads::build(&prep.tris, &point.params)?;
-        stages.0.push(ms(a.timings.fill_depth));
-        stages.1.push(ms(a.timings.mip_depth));
-        stages.2.push(ms(a.timings.fill_primitives));
-        Ok::<_, dirt_cpu::CpuError>(a)
-    })
-    .map_err(|source| EvalError::Build {
-        scene: prep.name.clone(),
-        source,
-    })?;
-    let mem = ads.memory();
-    let entry = |name: &str| mem.entries.iter().find(|e| e.name == name);
-    let setting = point.label();
-    res.builds.push(BuildRow {
-        scene: prep.name.clone(),
-        triangles: prep.tris.len(),
-        backend: "dirt-cpu".into(),
-        setting: setting.clone(),
-        views: match (point.params.views, point.at_camera) {
-            (ViewsKind::Cube, _) => "cube".into(),
-            (ViewsKind::Single, false) => "single".into(),
-            (ViewsKind::Single, true) => "single@camera".into(),
-        },
-        resolution: Some(point.params.resolution),
-        buckets: Some(point.params.buckets),
-        tile: Some(point.params.tile),
-        fill_depth_ms: Some(median(stages.0)),
-        mip_depth_ms: Some(median(stages.1)),
-        fill_primitives_ms: Some(median(stages.2)),
-        build_ms,
-        nodes: Some(ads.lists.ids.len() as u64),
-        depth_hiz_bytes: entry("depth + hi-z").map(|e| e.bytes),
-        depth_hiz_model_bytes: entry("depth + hi-z").and_then(|e| e.model),
-        id_buffer_bytes: entry("id buffer").map(|e| e.bytes),
-        id_buffer_model_bytes: entry("id buffer").and_then(|e| e.model),
-        total_bytes: Some(mem.total()),
-    });
+    let subject = prep.subject("dirt-cpu", point.setting());
+    let mut cpu = DirtCpu::new(point.params, Traversal::Linear);
+    let built = measure::build(&mut cpu, &prep.tris, cfg.repeat).map_err(prep.build_err())?;
+    let structure = cpu.ads().map(Structure::of_cpu).unwrap_or_default();
+    res.builds.push(BuildRow::new(&subject, &built, &structure));
+    let plan = Plan {
+        rays: None,
+        repeat: cfg.repeat,
+        stats: StatsPass::Prefix(prep.compared()),
+        per_ray: None,
+        how: Match::Bits,
+    };
     for &trav in &cfg.traversals {
-        for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
-            let (t_ms, hits) = timed::<_, EvalError>(cfg.repeat, || {
-                Ok(dirt_cpu::trace(&ads, &prep.tris, rays, trav))
-            })?;
-            let (_, stats) =
-                dirt_cpu::trace_with_stats(&ads, &prep.tris, &rays[..truth.len()], trav);
-            let (tiles, buckets, tests) = per_ray(&stats);
-            let d = compare(&hits, truth, Match::Bits);
-            res.traces.push(TraceRow {
-                scene: prep.name.clone(),
-                triangles: prep.tris.len(),
-                backend: "dirt-cpu".into(),
-                setting: setting.clone(),
-                traversal: traversal_name(trav).into(),
-                ray_type: ty.to_string(),
-                rays: rays.len(),
-                trace_ms: t_ms,
-                mrays_per_s: mrays(rays.len(), t_ms),
-                tiles_per_ray: Some(tiles),
-                buckets_per_ray: Some(buckets),
-                tests_per_ray: Some(tests),
-                compared: d.compared,
-                differ: d.differ,
-                differ_prim: d.differ_prim,
-                cpu_finished: None,
-            });
-        }
+        cpu.traversal = trav;
+        trace_types(prep, &mut cpu, &subject.with_traversal(trav), plan, res)?;
     }
     Ok(())
 }
 
 fn measure_peer(
     prep: &Prepared,
-    peer: PeerKind,
+    peer: &Peer,
     threads: usize,
     cfg: &EvalConfig,
     res: &mut EvalResults,
 ) -> Result<(), EvalError> {
-    let mut times = Vec::new();
-    let mut built = None;
-    for _ in 0..cfg.repeat.max(1) {
-        let (p, t) = peer.build(&prep.tris, threads)?;
-        times.push(ms(t));
-        built = Some(p);
-    }
-    let Some(p) = built else {
-        return Ok(());
-    };
-    res.builds.push(BuildRow {
-        scene: prep.name.clone(),
-        triangles: prep.tris.len(),
-        backend: peer.name().into(),
-        setting: String::new(),
-        views: String::new(),
-        resolution: None,
-        buckets: None,
-        tile: None,
-        fill_depth_ms: None,
-        mip_depth_ms: None,
-        fill_primitives_ms: None,
-        build_ms: median(times),
-        nodes: None,
-        depth_hiz_bytes: None,
-        depth_hiz_model_bytes: None,
-        id_buffer_bytes: None,
-        id_buffer_model_bytes: None,
-        total_bytes: p.memory(),
+    let subject = prep.subject(peer.name, Setting::default());
+    let built = (peer.make)(threads).and_then(|mut tracer| {
+        let b = measure::build(tracer.as_mut(), &prep.tris, cfg.repeat)?;
+        Ok((tracer, b))
     });
-    for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
-        let (t_ms, hits) = timed::<_, EvalError>(cfg.repeat, || Ok(p.trace(rays)))?;
-        let d: Disagreement = compare(&hits, truth, Match::PEER);
-        res.traces.push(TraceRow {
-            scene: prep.name.clone(),
-            triangles: prep.tris.len(),
-            backend: peer.name().into(),
-            setting: String::new(),
-            traversal: String::new(),
-            ray_type: ty.to_string(),
-            rays: rays.len(),
-            trace_ms: t_ms,
-            mrays_per_s: mrays(rays.len(), t_ms),
-            tiles_per_ray: None,
-            buckets_per_ray: None,
-            tests_per_ray: None,
-            compared: d.compared,
-            differ: d.differ,
-            differ_prim: d.differ_prim,
-            cpu_finished: None,
-        });
-    }
-    Ok(())
+    let (mut tracer, built) = match built {
+        Ok(b) => b,
+        Err(e) if crate::peers::unavailable(&e) => {
+            res.notes.push(e.to_string());
+            return Ok(());
+        }
+        Err(e) => return Err(prep.build_err()(e)),
+    };
+    res.builds
+        .push(BuildRow::new(&subject, &built, &Structure::default()));
+    let plan = Plan {
+        rays: None,
+        repeat: cfg.repeat,
+        stats: StatsPass::Prefix(prep.compared()),
+        per_ray: None,
+        how: Match::PEER,
+    };
+    trace_types(prep, tracer.as_mut(), &subject, plan, res)
 }
 
 fn measure_gpu(
@@ -810,61 +676,23 @@ fn measure_gpu(
     res: &mut EvalResults,
 ) -> Result<(), EvalError> {
     let point = default_point();
-    let mut stages = (Vec::new(), Vec::new(), Vec::new());
-    let (build_ms, ads) = timed(cfg.repeat.min(2), || {
-        let a = dirt_gpu::GpuAds::build(gpu, &prep.tris, &point.params)?;
-        stages.0.push(ms(a.timings.fill_depth));
-        stages.1.push(ms(a.timings.mip_depth));
-        stages.2.push(ms(a.timings.fill_primitives));
-        Ok::<_, EvalError>(a)
-    })?;
-    res.builds.push(BuildRow {
-        scene: prep.name.clone(),
-        triangles: prep.tris.len(),
-        backend: "dirt-gpu".into(),
-        setting: point.label(),
-        views: "cube".into(),
-        resolution: Some(point.params.resolution),
-        buckets: Some(point.params.buckets),
-        tile: Some(point.params.tile),
-        fill_depth_ms: Some(median(stages.0)),
-        mip_depth_ms: Some(median(stages.1)),
-        fill_primitives_ms: Some(median(stages.2)),
-        build_ms,
-        nodes: Some(u64::from(ads.nodes)),
-        depth_hiz_bytes: None,
-        depth_hiz_model_bytes: None,
-        id_buffer_bytes: None,
-        id_buffer_model_bytes: None,
-        total_bytes: None,
-    });
+    let subject = prep.subject("dirt-gpu", point.setting());
+    let mut tracer = DirtGpu::new(gpu, point.params, Traversal::Linear);
+    let built =
+        measure::build(&mut tracer, &prep.tris, cfg.repeat.min(2)).map_err(prep.build_err())?;
+    let structure = tracer.ads().map(Structure::of_gpu).unwrap_or_default();
+    res.builds.push(BuildRow::new(&subject, &built, &structure));
+    // The GPU's statistics come back with its hits: count them in the timed trace.
+    let plan = Plan {
+        rays: Some(gc.rays),
+        repeat: 1,
+        stats: StatsPass::Timed,
+        per_ray: None,
+        how: Match::Bits,
+    };
     for &trav in &cfg.traversals {
-        for ((ty, rays), truth) in prep.rays.iter().zip(&prep.truth) {
-            let n = gc.rays.min(rays.len());
-            let (t_ms, traced) = timed(1, || {
-                dirt_gpu::trace::trace_report(gpu, &ads, &rays[..n], trav)
-            })?;
-            let (tiles, buckets, tests) = per_ray(&traced.stats);
-            let d = compare(&traced.hits, truth, Match::Bits);
-            res.traces.push(TraceRow {
-                scene: prep.name.clone(),
-                triangles: prep.tris.len(),
-                backend: "dirt-gpu".into(),
-                setting: point.label(),
-                traversal: traversal_name(trav).into(),
-                ray_type: ty.to_string(),
-                rays: n,
-                trace_ms: t_ms,
-                mrays_per_s: mrays(n, t_ms),
-                tiles_per_ray: Some(tiles),
-                buckets_per_ray: Some(buckets),
-                tests_per_ray: Some(tests),
-                compared: d.compared,
-                differ: d.differ,
-                differ_prim: d.differ_prim,
-                cpu_finished: Some(traced.cpu_finished),
-            });
-        }
+        tracer.traversal = trav;
+        trace_types(prep, &mut tracer, &subject.with_traversal(trav), plan, res)?;
     }
     Ok(())
 }

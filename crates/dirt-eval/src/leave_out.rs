@@ -11,16 +11,14 @@
 //! * `cost model`: the candidate `dirt_cpu::cost::choose` ranks cheapest for
 //!   a frame of every ray of the run (what `--auto` builds), leaving out too.
 
-use std::time::Instant;
-
-use dirt_core::{AdsParams, Traversal};
+use dirt_core::{AdsParams, CoreError, Tracer, Traversal};
 use dirt_cpu::cost::{CostModel, candidates, choose};
-use dirt_cpu::{Ads, trace};
+use dirt_cpu::{Ads, DirtCpu};
 use dirt_math::{Hit, Ray, Triangle, Vec3};
 use serde::Serialize;
 
-use crate::EvalError;
-use crate::harness::{median, ms};
+use crate::measure::{self, StatsPass};
+use crate::{EvalError, Match, compare};
 
 /// One configuration of one scene.
 #[derive(Clone, Debug, Serialize)]
@@ -64,55 +62,48 @@ fn measure(
     params: &AdsParams,
     all_views: bool,
 ) -> Result<LeaveOutRow, EvalError> {
-    let build_err = |source| EvalError::Build {
-        scene: input.scene.to_string(),
+    let scene = || input.scene.to_string();
+    let build_err = |source: CoreError| EvalError::Build {
+        scene: scene(),
         source,
     };
-    let mut build_times = Vec::new();
-    let mut built = None;
-    for _ in 0..input.repeat.max(1) {
-        let t = Instant::now();
-        let ads = if all_views {
+    let trace_err = |source| EvalError::Trace {
+        scene: scene(),
+        source,
+    };
+    // `DirtCpu` builds with `Ads::build` only: time the build of either kind here.
+    let (build_ms, ads) = measure::timed(input.repeat, || {
+        if all_views {
             Ads::build_all_views(input.tris, params)
         } else {
             Ads::build(input.tris, params)
         }
-        .map_err(build_err)?;
-        build_times.push(ms(t.elapsed()));
-        built = Some(ads);
-    }
-    let Some(ads) = built else {
-        return Err(EvalError::Config("repeat must be at least 1".into()));
-    };
-    let mut trace_times = Vec::new();
-    for _ in 0..input.repeat.max(1) {
-        let t = Instant::now();
-        std::hint::black_box(trace(&ads, input.tris, input.rays, Traversal::HiZ));
-        trace_times.push(ms(t.elapsed()));
-    }
+    })
+    .map_err(|e| build_err(e.into()))?;
+    let (views_built, bytes) = (ads.views.slots(), ads.memory().total());
+    let mut tracer = DirtCpu::from_ads(ads, input.tris, Traversal::HiZ);
+    let traced = measure::trace(&mut tracer, input.rays, input.repeat, StatsPass::Prefix(0))
+        .map_err(trace_err)?;
     let mut differ = 0;
     let mut compared = 0;
     for (rays, truth) in &input.compared {
-        let hits = trace(&ads, input.tris, rays, Traversal::HiZ);
-        differ += hits
-            .iter()
-            .zip(truth.iter())
-            .filter(|(h, g)| h.bits() != g.bits())
-            .count();
-        compared += truth.len();
+        let hits = tracer.trace(rays).map_err(trace_err)?;
+        let d = compare(&hits, truth, Match::Bits);
+        differ += d.differ;
+        compared += d.compared;
     }
     Ok(LeaveOutRow {
-        scene: input.scene.to_string(),
+        scene: scene(),
         centre: centre.to_string(),
         config: config.to_string(),
         views: format!("{:?}", params.views).to_lowercase(),
         resolution: params.resolution,
         buckets: params.buckets,
-        views_built: ads.views.slots(),
-        build_ms: median(build_times),
-        trace_ms: median(trace_times),
+        views_built,
+        build_ms,
+        trace_ms: traced.trace_ms,
         rays: input.rays.len(),
-        bytes: ads.memory().total(),
+        bytes,
         differ,
         compared,
     })
@@ -153,7 +144,7 @@ pub fn run(input: &Input<'_>) -> Result<Vec<LeaveOutRow>, EvalError> {
     )
     .map_err(|source| EvalError::Build {
         scene: input.scene.to_string(),
-        source,
+        source: source.into(),
     })?;
     if let Some(best) = ranked.first() {
         rows.push(measure(

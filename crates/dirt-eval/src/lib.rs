@@ -14,7 +14,16 @@
 //! * the image error (RMSE, FLIP) of path-traced renders against a converged
 //!   reference as samples accumulate, against wall time ([`renders`]).
 //!
+//! Every figure is taken by [`measure`], one measuring path over
+//! `&mut dyn dirt_core::Tracer` (DIRT on the CPU and GPU, brute force and the
+//! peers are all tracers), which also makes the rows of the report. Adding a
+//! tracer to the evaluation: implement `Tracer`, add its line to
+//! [`peers::available`].
+//!
 //! [`report`] writes CSV, JSON, Markdown and plots ([`plot`]).
+//!
+//! Imports go one way: [`harness`] uses [`dynamic`], [`leave_out`],
+//! [`renders`] and [`peers`], which use [`measure`] (a leaf), never the harness.
 //!
 //! Thread counts: DIRT's CPU stages, brute force and the peers' traces run on
 //! rayon's global pool; Embree builds with the same number of threads; the
@@ -23,6 +32,7 @@
 pub mod dynamic;
 pub mod harness;
 pub mod leave_out;
+pub mod measure;
 pub mod peers;
 pub mod plot;
 pub mod rays;
@@ -48,12 +58,14 @@ pub enum EvalError {
     Build {
         scene: String,
         #[source]
-        source: dirt_cpu::CpuError,
+        source: dirt_core::CoreError,
     },
-    #[error("peer unavailable: {0}")]
-    PeerUnavailable(String),
-    #[error("gpu: {0}")]
-    Gpu(#[from] dirt_gpu::GpuError),
+    #[error("scene {scene}: cannot trace: {source}")]
+    Trace {
+        scene: String,
+        #[source]
+        source: dirt_core::CoreError,
+    },
     #[error("cannot write {path}: {source}")]
     Io {
         path: String,
@@ -157,5 +169,8 @@ mod tests {
         let far = Hit { t: 2.1, ..a };
         assert_eq!(compare(&[far], &[a], Match::PEER).differ, 1);
         assert_eq!(compare(&got[..2], &truth, Match::Bits).compared, 2);
+        // -0.0 == 0.0 as floats, but not as bits.
+        let (z, nz) = (Hit { u: 0.0, ..a }, Hit { u: -0.0, ..a });
+        assert_eq!(compare(&[z], &[nz], Match::Bits).differ, 1);
     }
 }

@@ -1,89 +1,115 @@
 //! Peers measured in the same run on the same triangles and rays: `obvhs`
 //! (a compressed wide BVH, CWBVH) and, with the `embree` feature, Embree 3.
+//! Each is a [`Tracer`], measured by [`crate::measure`] like DIRT.
+//!
+//! **Adding a tracer to the evaluation**: implement [`Tracer`] for it and add
+//! its one line to [`available`]. The harness then builds and traces it on
+//! every scene and ray type, and on every frame of the dynamic scene, beside
+//! DIRT and against brute force.
 //!
 //! Each peer uses its own triangle test, as it would in an application. Their
 //! hits are reported as [`Hit`]s with the primitive id in the scene's order
 //! and `t`; `u` and `v` are left 0, since the error is counted on `prim`
-//! and `t` (see [`crate::compare`]).
+//! and `t` (see [`crate::Match::PEER`]).
 //!
 //! Threads: the obvhs build is single-threaded (the crate's `parallel`
 //! feature is off); traces of both peers run over rayon's pool, as DIRT's do.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use dirt_math::{Hit, Ray, Triangle};
+use dirt_core::{
+    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, check_lengths,
+};
 use rayon::prelude::*;
 
-use crate::EvalError;
-
-/// A built peer structure.
-pub trait Peer: Sync {
-    /// Trace `rays`, closest hits in the scene's primitive order.
-    fn trace(&self, rays: &[Ray]) -> Vec<Hit>;
-    /// Bytes of the structure, where the peer says.
-    fn memory(&self) -> Option<u64>;
+/// A peer of the evaluation: its name and how to make it.
+#[derive(Clone, Copy, Debug)]
+pub struct Peer {
+    /// The name of its rows (`backend`).
+    pub name: &'static str,
+    /// A tracer, not yet built, given the harness's thread count. An error
+    /// (a library that cannot start) is noted and the peer skipped.
+    pub make: fn(threads: usize) -> Result<Box<dyn Tracer>, CoreError>,
 }
 
-/// Which peer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PeerKind {
-    Obvhs,
-    Embree,
+/// The peers this build has, one line each (Embree only with the `embree` feature).
+pub fn available() -> Vec<Peer> {
+    vec![
+        Peer {
+            name: "obvhs",
+            make: |_| Ok(Box::new(Obvhs::default())),
+        },
+        #[cfg(feature = "embree")]
+        Peer {
+            name: "embree",
+            make: |threads| Ok(Box::new(embree::Embree::new(threads)?)),
+        },
+    ]
 }
 
-impl PeerKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            PeerKind::Obvhs => "obvhs",
-            PeerKind::Embree => "embree",
-        }
-    }
+/// Whether a peer's error says its library could not do the work (the
+/// harness notes it and skips the peer) rather than that the input was bad.
+pub fn unavailable(e: &CoreError) -> bool {
+    matches!(e, CoreError::Backend { .. })
+}
 
-    /// The peers this build has (Embree only with the `embree` feature).
-    pub fn available() -> Vec<PeerKind> {
-        let mut v = vec![PeerKind::Obvhs];
-        if cfg!(feature = "embree") {
-            v.push(PeerKind::Embree);
-        }
-        v
-    }
-
-    /// Builds the peer's structure over `tris`; returns it and the build's wall time.
-    pub fn build(
-        self,
-        tris: &[Triangle],
-        threads: usize,
-    ) -> Result<(Box<dyn Peer>, Duration), EvalError> {
-        match self {
-            PeerKind::Obvhs => {
-                let start = Instant::now();
-                let p = Obvhs::build(tris);
-                Ok((Box::new(p), start.elapsed()))
-            }
-            PeerKind::Embree => embree_build(tris, threads),
-        }
-    }
+/// The structure of a peer's last build; tracing before any build is an error.
+fn built<'a, T>(structure: &'a Option<T>, tracer: &str) -> Result<&'a T, CoreError> {
+    structure.as_ref().ok_or_else(|| CoreError::NotBuilt {
+        tracer: tracer.to_string(),
+    })
 }
 
 /// obvhs's CWBVH with its own triangles.
+#[derive(Default)]
 pub struct Obvhs {
-    bvh: obvhs::cwbvh::CwBvh,
+    bvh: Option<obvhs::cwbvh::CwBvh>,
     tris: Vec<obvhs::triangle::Triangle>,
 }
 
 impl std::fmt::Debug for Obvhs {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Obvhs")
-            .field("nodes", &self.bvh.nodes.len())
+            .field("nodes", &self.bvh.as_ref().map(|b| b.nodes.len()))
             .finish()
     }
 }
 
 impl Obvhs {
-    /// Builds a CWBVH with obvhs's `fast_build` preset (the preset meant for
+    fn trace_ray(bvh: &obvhs::cwbvh::CwBvh, tris: &[obvhs::triangle::Triangle], r: &Ray) -> Hit {
+        if r.validate().is_err() || tris.is_empty() {
+            return Hit::MISS;
+        }
+        let o = bytemuck::cast([r.origin[0], r.origin[1], r.origin[2], 0.0f32]);
+        let d = bytemuck::cast([r.dir[0], r.dir[1], r.dir[2], 0.0f32]);
+        let ray = obvhs::ray::Ray::new(o, d, r.tmin, r.tmax);
+        let mut hit = obvhs::ray::RayHit::none();
+        // obvhs ids are BVH-order indices: map through `primitive_indices`.
+        let found = bvh.ray_traverse(ray, &mut hit, |ray, id| {
+            tris[bvh.primitive_indices[id] as usize].intersect(ray)
+        });
+        if found {
+            Hit {
+                prim: bvh.primitive_indices[hit.primitive_id as usize],
+                t: hit.t,
+                u: 0.0,
+                v: 0.0,
+            }
+        } else {
+            Hit::MISS
+        }
+    }
+}
+
+impl Tracer for Obvhs {
+    fn name(&self) -> String {
+        "obvhs".to_string()
+    }
+
+    /// A CWBVH with obvhs's `fast_build` preset (the preset meant for
     /// structures rebuilt every frame).
-    pub fn build(tris: &[Triangle]) -> Obvhs {
-        let tris: Vec<obvhs::triangle::Triangle> = tris
+    fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
+        self.tris = tris
             .iter()
             .map(|t| {
                 let v = |i: usize| {
@@ -98,65 +124,33 @@ impl Obvhs {
             })
             .collect();
         let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-            &tris,
+            &self.tris,
             obvhs::BvhBuildParams::fast_build(),
             &mut Duration::default(),
         );
-        Obvhs { bvh, tris }
+        let memory = (bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + bvh.primitive_indices.len() * 4) as u64;
+        self.bvh = Some(bvh);
+        Ok(BuildReport {
+            stages: Vec::new(),
+            memory: Some(memory),
+        })
     }
 
-    fn trace_ray(&self, r: &Ray) -> Hit {
-        if r.validate().is_err() || self.tris.is_empty() {
-            return Hit::MISS;
-        }
-        let o = bytemuck::cast([r.origin[0], r.origin[1], r.origin[2], 0.0f32]);
-        let d = bytemuck::cast([r.dir[0], r.dir[1], r.dir[2], 0.0f32]);
-        let ray = obvhs::ray::Ray::new(o, d, r.tmin, r.tmax);
-        let mut hit = obvhs::ray::RayHit::none();
-        // obvhs ids are BVH-order indices: map through `primitive_indices`.
-        let found = self.bvh.ray_traverse(ray, &mut hit, |ray, id| {
-            self.tris[self.bvh.primitive_indices[id] as usize].intersect(ray)
-        });
-        if found {
-            Hit {
-                prim: self.bvh.primitive_indices[hit.primitive_id as usize],
-                t: hit.t,
-                u: 0.0,
-                v: 0.0,
-            }
-        } else {
-            Hit::MISS
-        }
+    fn trace_into(
+        &mut self,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        stats: Option<&mut [RayStats]>,
+    ) -> Result<TraceReport, CoreError> {
+        check_lengths(rays, hits, stats.as_deref())?;
+        let bvh = built(&self.bvh, "obvhs")?;
+        let tris = &self.tris;
+        rays.par_iter()
+            .zip(hits.par_iter_mut())
+            .for_each(|(r, h)| *h = Obvhs::trace_ray(bvh, tris, r));
+        Ok(TraceReport::default())
     }
-}
-
-impl Peer for Obvhs {
-    fn trace(&self, rays: &[Ray]) -> Vec<Hit> {
-        rays.par_iter().map(|r| self.trace_ray(r)).collect()
-    }
-
-    fn memory(&self) -> Option<u64> {
-        Some(
-            (self.bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
-                + self.bvh.primitive_indices.len() * 4) as u64,
-        )
-    }
-}
-
-#[cfg(not(feature = "embree"))]
-fn embree_build(_: &[Triangle], _: usize) -> Result<(Box<dyn Peer>, Duration), EvalError> {
-    Err(EvalError::PeerUnavailable(
-        "embree: this build has no Embree (build with `--features embree`, needs libembree-dev)"
-            .into(),
-    ))
-}
-
-#[cfg(feature = "embree")]
-fn embree_build(tris: &[Triangle], threads: usize) -> Result<(Box<dyn Peer>, Duration), EvalError> {
-    let e = embree::Embree::device(threads)?;
-    let start = Instant::now();
-    let scene = embree::Embree::build(e, tris)?;
-    Ok((Box::new(scene), start.elapsed()))
 }
 
 #[cfg(feature = "embree")]
@@ -168,9 +162,10 @@ pub mod embree {
     use super::*;
     use embree3::{BufferUsage, Config, Device, Format, GeometryKind, IntersectContext, RayHit};
 
-    /// A committed Embree scene.
+    /// An Embree device and the scene of its last build.
     pub struct Embree {
-        scene: embree3::Scene<'static>,
+        device: Device,
+        scene: Option<embree3::Scene<'static>>,
     }
 
     impl std::fmt::Debug for Embree {
@@ -179,27 +174,54 @@ pub mod embree {
         }
     }
 
-    fn err(what: &str, e: impl std::fmt::Debug) -> EvalError {
-        EvalError::PeerUnavailable(format!("embree: {what}: {e:?}"))
+    /// What Embree refused, with its error code.
+    #[derive(Debug, thiserror::Error)]
+    #[error("{what}: {code}")]
+    pub struct EmbreeError {
+        what: &'static str,
+        code: String,
+    }
+
+    fn err(what: &'static str, e: impl std::fmt::Debug) -> CoreError {
+        CoreError::backend(
+            "embree",
+            EmbreeError {
+                what,
+                code: format!("{e:?}"),
+            },
+        )
     }
 
     impl Embree {
-        /// A device building on `threads` threads.
-        pub fn device(threads: usize) -> Result<Device, EvalError> {
-            Device::with_config(Config {
+        /// A device building on `threads` threads; call [`Tracer::build`] before tracing.
+        pub fn new(threads: usize) -> Result<Embree, CoreError> {
+            let device = Device::with_config(Config {
                 threads: threads as u32,
                 ..Config::default()
             })
-            .map_err(|e| err("cannot create a device", e))
+            .map_err(|e| err("cannot create a device", e))?;
+            Ok(Embree {
+                device,
+                scene: None,
+            })
+        }
+    }
+
+    impl Tracer for Embree {
+        fn name(&self) -> String {
+            "embree".to_string()
         }
 
-        /// Builds a scene over `tris` on `device`.
-        pub fn build(device: Device, tris: &[Triangle]) -> Result<Embree, EvalError> {
-            let mut scene = device
+        /// One triangle geometry over `tris`, committed with the default build quality.
+        fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
+            self.scene = None;
+            let mut scene = self
+                .device
                 .create_scene()
                 .map_err(|e| err("cannot create a scene", e))?;
             let n = tris.len();
-            let mut geom = device
+            let mut geom = self
+                .device
                 .create_geometry(GeometryKind::TRIANGLE)
                 .map_err(|e| err("cannot create a geometry", e))?;
             {
@@ -224,36 +246,81 @@ pub mod embree {
             let geom = geom.commit();
             scene.attach_geometry(&geom);
             scene.commit();
-            Ok(Embree { scene })
+            self.scene = Some(scene);
+            Ok(BuildReport::default())
+        }
+
+        fn trace_into(
+            &mut self,
+            rays: &[Ray],
+            hits: &mut [Hit],
+            stats: Option<&mut [RayStats]>,
+        ) -> Result<TraceReport, CoreError> {
+            check_lengths(rays, hits, stats.as_deref())?;
+            let scene = built(&self.scene, "embree")?;
+            rays.par_iter().zip(hits.par_iter_mut()).for_each_init(
+                IntersectContext::incoherent,
+                |ctx, (r, h)| {
+                    *h = if r.validate().is_err() {
+                        Hit::MISS
+                    } else {
+                        let mut rh = RayHit::from_ray(embree3::Ray::segment(
+                            r.origin, r.dir, r.tmin, r.tmax,
+                        ));
+                        scene.intersect(ctx, &mut rh);
+                        if rh.hit.is_valid() {
+                            Hit {
+                                prim: rh.hit.primID,
+                                t: rh.ray.tfar,
+                                u: 0.0,
+                                v: 0.0,
+                            }
+                        } else {
+                            Hit::MISS
+                        }
+                    };
+                },
+            );
+            Ok(TraceReport::default())
         }
     }
+}
 
-    impl Peer for Embree {
-        fn trace(&self, rays: &[Ray]) -> Vec<Hit> {
-            rays.par_iter()
-                .map_init(IntersectContext::incoherent, |ctx, r| {
-                    if r.validate().is_err() {
-                        return Hit::MISS;
-                    }
-                    let mut rh =
-                        RayHit::from_ray(embree3::Ray::segment(r.origin, r.dir, r.tmin, r.tmax));
-                    self.scene.intersect(ctx, &mut rh);
-                    if rh.hit.is_valid() {
-                        Hit {
-                            prim: rh.hit.primID,
-                            t: rh.ray.tfar,
-                            u: 0.0,
-                            v: 0.0,
-                        }
-                    } else {
-                        Hit::MISS
-                    }
-                })
-                .collect()
-        }
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dirt_math::Vec3;
 
-        fn memory(&self) -> Option<u64> {
-            None
+    #[test]
+    fn peers_are_tracers_with_the_scene_order_of_primitives() {
+        let tris: Vec<Triangle> = (0..8)
+            .map(|k| {
+                let z = 8.0 - k as f32;
+                Triangle::new(
+                    Vec3::new(-1.0, -1.0, z),
+                    Vec3::new(1.0, -1.0, z),
+                    Vec3::new(0.0, 1.0, z),
+                )
+            })
+            .collect();
+        let rays = [
+            Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z, 0.0, f32::INFINITY),
+            Ray::new(Vec3::new(5.0, 0.0, -1.0), Vec3::Z, 0.0, f32::INFINITY),
+        ];
+        let truth = dirt_cpu::brute_force::trace(&tris, &rays);
+        for peer in available() {
+            let mut t = (peer.make)(1).expect("peer starts");
+            assert_eq!(t.name(), peer.name);
+            assert!(matches!(t.trace(&rays), Err(CoreError::NotBuilt { .. })));
+            t.build(&tris).expect("peer builds");
+            let hits = t.trace(&rays).expect("peer traces");
+            assert_eq!(
+                crate::compare(&hits, &truth, crate::Match::PEER).differ,
+                0,
+                "{}: {hits:?}",
+                peer.name
+            );
+            assert_eq!(hits[0].prim, 7);
         }
     }
 }

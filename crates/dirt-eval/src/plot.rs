@@ -8,7 +8,8 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use crate::EvalError;
-use crate::harness::{EvalResults, TraceRow};
+use crate::harness::EvalResults;
+use crate::measure::TraceRow;
 
 /// A written plot: its title and file name (inside the output folder).
 #[derive(Clone, Debug)]

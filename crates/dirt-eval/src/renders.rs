@@ -19,7 +19,7 @@ use dirt_render::{Camera, Renderer, Settings};
 use serde::Serialize;
 
 use crate::EvalError;
-use crate::harness::ms;
+use crate::measure::ms;
 
 /// What to render.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use crate::EvalError;
 use crate::dynamic::medians;
-use crate::harness::{BuildRow, EvalResults, TraceRow, mrays};
+use crate::harness::EvalResults;
+use crate::measure::{BuildRow, TraceRow, mrays};
 use crate::plot::{self, Plot};
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> EvalError + '_ {
