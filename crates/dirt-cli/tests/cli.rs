@@ -717,11 +717,15 @@ fn bench_prints_a_table_of_both_traversals() {
         if gpu_used { 2 } else { 0 },
         "{table}\n{log}"
     );
+    // The rows are dirt_eval::measure's trace rows: `compared` and `differ`
+    // count against brute force.
     let json = fs::read_to_string(&json).expect("bench json");
     for word in [
         "\"rows\"",
         "\"traversal\": \"hiz\"",
-        "\"mismatches_vs_brute\"",
+        "\"compared\": 2000",
+        "\"differ\": 0",
+        "\"mismatches_vs_cpu\"",
     ] {
         assert!(json.contains(word), "bench json lacks {word:?}:\n{json}");
     }

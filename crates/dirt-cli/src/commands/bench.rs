@@ -6,22 +6,30 @@
 //! `--repeat` runs; brute force traces only the first `--brute-rays` rays and
 //! its rate is reported as measured on that many. The table goes to stdout,
 //! progress to stderr, the same figures optionally to a JSON file.
+//!
+//! Every backend is a `dirt_core::Tracer` measured by `dirt_eval::measure`,
+//! the measuring path of `dirt eval`: the rows are its `BuildRow` and
+//! `TraceRow`, and the JSON is them, serialized.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use dirt_core::Traversal;
-use dirt_cpu::Ads;
-use dirt_gpu::{Gpu, GpuAds};
+use dirt_core::{AdsParams, Tracer, Traversal};
+use dirt_cpu::DirtCpu;
+use dirt_cpu::brute_force::Brute;
+use dirt_eval::measure::{
+    self, BuildRow, PerRay, Setting, StatsPass, Structure, Subject, TraceMeasure, TraceRow,
+};
+use dirt_eval::rays::{self, Camera, RayKind};
+use dirt_eval::{Disagreement, Match, compare};
+use dirt_gpu::{DirtGpu, Gpu};
 use dirt_math::{Hit, Ray, RayStats, Triangle};
+use serde::Serialize;
 
 use crate::args::{AdsArgs, SceneArg};
-use crate::commands::millis;
 use crate::commands::trace::Backend;
-use dirt_eval::rays::{self, Camera, RayKind};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -57,55 +65,24 @@ pub struct BenchArgs {
     json: Option<PathBuf>,
 }
 
-const TRAVERSALS: [Traversal; 2] = [Traversal::Linear, Traversal::HiZ];
-
-/// Median build figures of one backend, in milliseconds.
-#[derive(Clone, Debug)]
-struct BuildFigures {
-    backend: &'static str,
-    fill_depth: f64,
-    mip_depth: f64,
-    fill_primitives: f64,
-    /// Median of the per-build sums of the three stages.
-    total: f64,
-    /// Median wall time of the whole call (checks, views, uploads included).
-    wall: f64,
-    nodes: u64,
-}
-
-/// Mismatching rays out of the rays compared.
-#[derive(Clone, Copy, Debug)]
-struct Mismatch {
+/// Rays whose statistics differ from the cpu's, out of the rays compared.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+struct StatsMismatch {
+    compared: usize,
     differ: usize,
-    of: usize,
 }
 
-/// One line of the table.
-#[derive(Clone, Debug)]
+/// One line of the table: the evaluation's trace row (its `compared`,
+/// `differ` and `differ_prim` are against brute force) and what only the
+/// bench compares.
+#[derive(Clone, Debug, Serialize)]
 struct Row {
-    backend: &'static str,
-    traversal: Option<&'static str>,
-    build_ms: Option<f64>,
-    trace_ms: f64,
-    rays: usize,
-    /// Average tiles, buckets and tests per ray (brute force: tests only).
-    tiles: Option<f64>,
-    buckets: Option<f64>,
-    tests: f64,
-    vs_brute: Option<Mismatch>,
-    vs_cpu: Option<Mismatch>,
+    #[serde(flatten)]
+    trace: TraceRow,
+    /// Hits that differ from the cpu's (same traversal), over all rays.
+    mismatches_vs_cpu: Option<Disagreement>,
     /// Rays whose statistics differ from the cpu's (same traversal).
-    stats_vs_cpu: Option<Mismatch>,
-}
-
-impl Row {
-    fn mrays(&self) -> f64 {
-        if self.trace_ms > 0.0 {
-            self.rays as f64 / self.trace_ms / 1e3
-        } else {
-            f64::INFINITY
-        }
-    }
+    stats_mismatches_vs_cpu: Option<StatsMismatch>,
 }
 
 /// What became of the GPU.
@@ -116,59 +93,53 @@ enum GpuState {
     Used { adapter: String, exact: bool },
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
+/// The rays, the ground truth and what every row shares.
+struct Bench<'a> {
+    tris: &'a [Triangle],
+    rays: &'a [Ray],
+    /// Brute force's hits of the first rays (`None` with `--brute-rays 0`).
+    truth: Option<Vec<Hit>>,
+    scene: &'a str,
+    params: AdsParams,
+    /// The rays' kind, as the rows' `ray_type`.
+    kind: &'a str,
+    repeat: u32,
 }
 
-/// Times `k` runs of `f`; returns the median in ms and the last result.
-fn timed<T>(k: u32, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
-    let mut times = Vec::new();
-    let mut last = None;
-    for _ in 0..k.max(1) {
-        let start = Instant::now();
-        let out = f()?;
-        times.push(millis(start.elapsed()));
-        last = Some(out);
+impl Bench<'_> {
+    fn subject(&self, backend: Backend, setting: Setting) -> Subject {
+        Subject {
+            scene: self.scene.to_owned(),
+            triangles: self.tris.len(),
+            backend: backend.to_string(),
+            setting,
+            traversal: None,
+        }
     }
-    match last {
-        Some(out) => Ok((median(times), out)),
-        None => bail!("no run"),
-    }
-}
 
-/// Rays whose hits differ in any bit.
-fn mismatches(a: &[Hit], b: &[Hit]) -> Mismatch {
-    let of = a.len().min(b.len());
-    let differ = a[..of]
-        .iter()
-        .zip(&b[..of])
-        .filter(|(x, y)| bytemuck::bytes_of(*x) != bytemuck::bytes_of(*y))
-        .count()
-        + a.len().abs_diff(b.len());
-    Mismatch {
-        differ,
-        of: a.len().max(b.len()),
+    /// The row of a trace, judged against brute force.
+    fn row(&self, subject: &Subject, m: &TraceMeasure) -> Row {
+        let vs_brute = self
+            .truth
+            .as_ref()
+            .map_or_else(Disagreement::default, |t| compare(&m.hits, t, Match::Bits));
+        Row {
+            trace: TraceRow::new(subject, self.kind, m, vs_brute),
+            mismatches_vs_cpu: None,
+            stats_mismatches_vs_cpu: None,
+        }
     }
-}
 
-/// Average tiles, buckets and tests per ray.
-fn per_ray(stats: &[RayStats]) -> (f64, f64, f64) {
-    let n = stats.len().max(1) as f64;
-    let sum = |f: fn(&RayStats) -> u32| stats.iter().map(|s| u64::from(f(s))).sum::<u64>() as f64;
-    (
-        sum(|s| s.tiles) / n,
-        sum(|s| s.buckets) / n,
-        sum(|s| s.tests) / n,
-    )
+    /// Builds `tracer` `repeat` times: the build row.
+    fn build(&self, tracer: &mut dyn Tracer, subject: &Subject) -> Result<measure::BuildMeasure> {
+        eprintln!("{}: build x {}", subject.backend, self.repeat);
+        measure::build(tracer, self.tris, self.repeat).with_context(|| {
+            format!(
+                "cannot build the acceleration structure of {} ({:?})",
+                self.scene, self.params
+            )
+        })
+    }
 }
 
 fn kind_name(kind: RayKind) -> String {
@@ -214,92 +185,49 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             .join(",")
     );
 
+    let kind = kind_name(args.kind);
+    let mut bench = Bench {
+        tris,
+        rays: &rays,
+        truth: None,
+        scene: &scene.name,
+        params,
+        kind: &kind,
+        repeat: k,
+    };
     let mut rows = Vec::new();
     let mut builds = Vec::new();
 
     // Ground truth on the first rays.
     let n_brute = args.brute_rays.min(rays.len());
     let subset = &rays[..n_brute];
-    let truth: Option<Vec<Hit>> = if n_brute == 0 {
-        None
-    } else if backends.contains(&Backend::Brute) {
+    let mut brute = Brute::new(tris);
+    if n_brute > 0 && backends.contains(&Backend::Brute) {
         eprintln!("brute force: {n_brute} rays x {k}");
-        let (ms, hits) = timed(k, || Ok(dirt_cpu::brute_force::trace(tris, subset)))?;
-        rows.push(Row {
-            backend: "brute",
-            traversal: None,
-            build_ms: None,
-            trace_ms: ms,
-            rays: n_brute,
-            tiles: None,
-            buckets: None,
-            tests: tris.len() as f64,
-            vs_brute: None,
-            vs_cpu: None,
-            stats_vs_cpu: None,
-        });
-        Some(hits)
-    } else {
+        let mut m = measure::trace(&mut brute, subset, k, StatsPass::Prefix(0))?;
+        m.per_ray = PerRay::every_triangle(tris.len());
+        bench.truth = Some(m.hits.clone());
+        rows.push(bench.row(&bench.subject(Backend::Brute, Setting::default()), &m));
+    } else if n_brute > 0 {
         eprintln!("brute force: {n_brute} rays once (ground truth, not timed)");
-        Some(dirt_cpu::brute_force::trace(tris, subset))
-    };
-    let vs_brute = |hits: &[Hit]| {
-        truth
-            .as_ref()
-            .map(|t| mismatches(&hits[..n_brute.min(hits.len())], t))
-    };
+        bench.truth = Some(brute.trace(subset)?);
+    }
 
     // CPU.
-    let mut cpu_results: Vec<Option<Traced>> = vec![None, None];
+    let setting = Setting::dirt(&params, false);
+    let mut cpu_results: Vec<Option<TraceMeasure>> = vec![None, None];
     if backends.contains(&Backend::Cpu) {
-        eprintln!("cpu: build x {k}");
-        let mut stage_ms = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
-        let (wall, ads) = timed(k, || {
-            let ads = Ads::build(tris, &params).with_context(|| {
-                format!(
-                    "cannot build the acceleration structure of {} ({params:?})",
-                    scene.name
-                )
-            })?;
-            let t = ads.timings;
-            for (v, d) in
-                stage_ms
-                    .iter_mut()
-                    .zip([t.fill_depth, t.mip_depth, t.fill_primitives, t.total()])
-            {
-                v.push(millis(d));
-            }
-            Ok(ads)
-        })?;
-        let [fd, md, fp, total] = stage_ms.map(median);
-        builds.push(BuildFigures {
-            backend: "cpu",
-            fill_depth: fd,
-            mip_depth: md,
-            fill_primitives: fp,
-            total,
-            wall,
-            nodes: ads.lists.ids.len() as u64,
-        });
-        for (slot, traversal) in cpu_results.iter_mut().zip(TRAVERSALS) {
-            eprintln!("cpu: trace {} x {k}", Traversal::name(traversal));
-            let (ms, hits) = timed(k, || Ok(dirt_cpu::trace(&ads, tris, &rays, traversal)))?;
-            let (_, stats) = dirt_cpu::trace_with_stats(&ads, tris, &rays, traversal);
-            let (tiles, buckets, tests) = per_ray(&stats);
-            rows.push(Row {
-                backend: "cpu",
-                traversal: Some(Traversal::name(traversal)),
-                build_ms: Some(total),
-                trace_ms: ms,
-                rays: rays.len(),
-                tiles: Some(tiles),
-                buckets: Some(buckets),
-                tests,
-                vs_brute: vs_brute(&hits),
-                vs_cpu: None,
-                stats_vs_cpu: None,
-            });
-            *slot = Some((hits, stats));
+        let subject = bench.subject(Backend::Cpu, setting.clone());
+        let mut cpu = DirtCpu::new(params, Traversal::Linear);
+        let built = bench.build(&mut cpu, &subject)?;
+        let structure = cpu.ads().map(Structure::of_cpu).unwrap_or_default();
+        builds.push(BuildRow::new(&subject, &built, &structure));
+        for (slot, traversal) in cpu_results.iter_mut().zip(Traversal::ALL) {
+            eprintln!("cpu: trace {traversal} x {k}");
+            cpu.traversal = traversal;
+            let m = measure::trace(&mut cpu, &rays, k, StatsPass::Prefix(rays.len()))?;
+            rows.push(bench.row(&subject.with_traversal(traversal), &m));
+            *slot = Some(m);
         }
     }
 
@@ -310,7 +238,8 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
                 eprintln!("{}", crate::gpu::gpu_line(&gpu));
                 let adapter = gpu.describe();
                 let exact = gpu.exact;
-                match bench_gpu(&gpu, tris, &params, &rays, k, &cpu_results, &vs_brute) {
+                let subject = bench.subject(Backend::Gpu, setting);
+                match bench_gpu(&gpu, &bench, &subject, &cpu_results) {
                     Ok((build, gpu_rows)) => {
                         builds.push(build);
                         rows.extend(gpu_rows);
@@ -340,115 +269,87 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         "gpu" => 1,
         _ => 2,
     };
-    rows.sort_by_key(|r| order(r.backend));
+    rows.sort_by_key(|r| order(&r.trace.backend));
 
+    let p = params;
+    let (gpu, gpu_exact, gpu_error) = match &gpu_state {
+        GpuState::NotRequested => (None, None, None),
+        GpuState::Unavailable(reason) => (None, None, Some(reason.clone())),
+        GpuState::Used { adapter, exact } => (Some(adapter.clone()), Some(*exact), None),
+    };
     let report = Report {
         scene: &scene.name,
         triangles: tris.len(),
         rays: rays.len(),
-        kind: kind_name(args.kind),
+        kind: &kind,
         seed: args.seed,
-        ads: &args.ads,
+        params: Params {
+            views: p.views.to_string(),
+            resolution: p.resolution,
+            buckets: p.buckets,
+            tile: p.tile,
+            center: p.center.map(|c| c.to_array()),
+        },
         repeat: k,
         brute_rays: n_brute,
-        threads,
-        gpu: &gpu_state,
-        builds: &builds,
-        rows: &rows,
+        cpu_threads: threads,
+        gpu,
+        gpu_exact,
+        gpu_error,
+        builds,
+        rows,
+        gpu_state,
     };
     print!("{}", report.markdown());
     if let Some(path) = &args.json {
-        std::fs::write(path, report.json())
+        let text = serde_json::to_string_pretty(&report).context("cannot write the JSON")?;
+        std::fs::write(path, text + "\n")
             .with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }
     Ok(())
 }
 
-/// Builds and traces on the GPU; rows for both traversals.
+/// Builds and traces on the GPU; rows for both traversals, compared with the cpu's.
 fn bench_gpu(
     gpu: &Gpu,
-    tris: &[Triangle],
-    params: &dirt_core::AdsParams,
-    rays: &[Ray],
-    k: u32,
-    cpu_results: &[Option<Traced>],
-    vs_brute: &dyn Fn(&[Hit]) -> Option<Mismatch>,
-) -> Result<(BuildFigures, Vec<Row>)> {
-    eprintln!("gpu: build x {k}");
-    let mut stage_ms = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
-    let (wall, ads) = timed(k, || {
-        let ads = GpuAds::build(gpu, tris, params)
-            .with_context(|| format!("cannot build the acceleration structure ({params:?})"))?;
-        let t = ads.timings;
-        for (v, d) in stage_ms.iter_mut().zip([
-            t.fill_depth,
-            t.mip_depth,
-            t.fill_primitives,
-            t.fill_depth + t.mip_depth + t.fill_primitives,
-        ]) {
-            v.push(millis(d));
-        }
-        Ok(ads)
-    })?;
-    let [fd, md, fp, total] = stage_ms.map(median);
-    let build = BuildFigures {
-        backend: "gpu",
-        fill_depth: fd,
-        mip_depth: md,
-        fill_primitives: fp,
-        total,
-        wall,
-        nodes: u64::from(ads.nodes),
-    };
+    bench: &Bench<'_>,
+    subject: &Subject,
+    cpu_results: &[Option<TraceMeasure>],
+) -> Result<(BuildRow, Vec<Row>)> {
+    let k = bench.repeat;
+    let mut tracer = DirtGpu::new(gpu, bench.params, Traversal::Linear);
+    let built = bench.build(&mut tracer, subject)?;
+    let structure = tracer.ads().map(Structure::of_gpu).unwrap_or_default();
+    let build = BuildRow::new(subject, &built, &structure);
     let mut rows = Vec::new();
-    for (cpu, traversal) in cpu_results.iter().zip(TRAVERSALS) {
-        eprintln!("gpu: trace {} x {k}", Traversal::name(traversal));
-        let (ms, traced) = timed(k, || {
-            dirt_gpu::trace::trace_report(gpu, &ads, rays, traversal).context("cannot trace")
-        })?;
-        if traced.cpu_finished > 0 {
+    for (cpu, traversal) in cpu_results.iter().zip(Traversal::ALL) {
+        eprintln!("gpu: trace {traversal} x {k}");
+        tracer.traversal = traversal;
+        // The GPU's statistics come back with its hits: count them in the timed traces.
+        let m =
+            measure::trace(&mut tracer, bench.rays, k, StatsPass::Timed).context("cannot trace")?;
+        if m.finished_elsewhere > 0 {
             eprintln!(
                 "gpu: {} of {} rays spent their GPU work budget and were finished by the CPU reference (included in the time)",
-                traced.cpu_finished,
-                rays.len()
+                m.finished_elsewhere,
+                bench.rays.len()
             );
         }
-        let (hits, stats) = (traced.hits, traced.stats);
-        if hits.len() != rays.len() {
-            bail!(
-                "the GPU returned {} hits for {} rays",
-                hits.len(),
-                rays.len()
-            );
+        let mut row = bench.row(&subject.with_traversal(traversal), &m);
+        if let Some(c) = cpu {
+            report_differences(traversal, bench.tris, bench.rays, &m.hits, &c.hits);
+            report_stats_differences(traversal, &m.stats, &c.stats);
+            row.mismatches_vs_cpu = Some(compare(&m.hits, &c.hits, Match::Bits));
+            row.stats_mismatches_vs_cpu = Some(StatsMismatch {
+                compared: m.stats.len(),
+                differ: m.stats.iter().zip(&c.stats).filter(|(a, b)| a != b).count(),
+            });
         }
-        if let Some((c, c_stats)) = cpu {
-            report_differences(traversal, tris, rays, &hits, c);
-            report_stats_differences(traversal, &stats, c_stats);
-        }
-        let (tiles, buckets, tests) = per_ray(&stats);
-        rows.push(Row {
-            backend: "gpu",
-            traversal: Some(Traversal::name(traversal)),
-            build_ms: Some(total),
-            trace_ms: ms,
-            rays: rays.len(),
-            tiles: Some(tiles),
-            buckets: Some(buckets),
-            tests,
-            vs_brute: vs_brute(&hits),
-            vs_cpu: cpu.as_ref().map(|(c, _)| mismatches(&hits, c)),
-            stats_vs_cpu: cpu.as_ref().map(|(_, c)| Mismatch {
-                differ: stats.iter().zip(c).filter(|(a, b)| a != b).count(),
-                of: stats.len(),
-            }),
-        });
+        rows.push(row);
     }
     Ok((build, rows))
 }
-
-/// Hits and statistics of one traversal.
-type Traced = (Vec<Hit>, Vec<RayStats>);
 
 /// A hit with its words as the hits file holds them.
 fn hit_words(h: &Hit) -> String {
@@ -525,20 +426,37 @@ fn report_stats_differences(traversal: Traversal, gpu: &[RayStats], cpu: &[RaySt
     }
 }
 
-/// Everything the table and the JSON say.
+/// The structure's parameters, as the JSON gives them.
+#[derive(Debug, Serialize)]
+struct Params {
+    views: String,
+    resolution: u32,
+    buckets: u32,
+    tile: u32,
+    center: Option<[f32; 3]>,
+}
+
+/// Everything the table and the JSON say; the JSON is this, serialized.
+#[derive(Debug, Serialize)]
 struct Report<'a> {
     scene: &'a str,
     triangles: usize,
     rays: usize,
-    kind: String,
+    kind: &'a str,
     seed: u64,
-    ads: &'a AdsArgs,
+    params: Params,
     repeat: u32,
     brute_rays: usize,
-    threads: usize,
-    gpu: &'a GpuState,
-    builds: &'a [BuildFigures],
-    rows: &'a [Row],
+    cpu_threads: usize,
+    /// The adapter, when the GPU was used.
+    gpu: Option<String>,
+    gpu_exact: Option<bool>,
+    /// Why the GPU was not used, when it was asked for.
+    gpu_error: Option<String>,
+    builds: Vec<BuildRow>,
+    rows: Vec<Row>,
+    #[serde(skip)]
+    gpu_state: GpuState,
 }
 
 fn fixed(x: f64, digits: usize) -> String {
@@ -566,13 +484,13 @@ fn opt(x: Option<f64>, digits: usize) -> String {
     x.map_or_else(|| "—".to_owned(), |x| fixed(x, digits))
 }
 
-fn mismatch_cell(m: Option<Mismatch>) -> String {
-    m.map_or_else(|| "—".to_owned(), |m| format!("{} / {}", m.differ, m.of))
+fn count_cell(d: Option<(usize, usize)>) -> String {
+    d.map_or_else(|| "—".to_owned(), |(differ, of)| format!("{differ} / {of}"))
 }
 
 impl Report<'_> {
     fn gpu_words(&self) -> String {
-        match self.gpu {
+        match &self.gpu_state {
             GpuState::NotRequested => "not benchmarked".to_owned(),
             GpuState::Unavailable(reason) => format!("not available ({reason})"),
             GpuState::Used { adapter, exact } => format!(
@@ -587,13 +505,14 @@ impl Report<'_> {
     }
 
     fn params_words(&self) -> String {
-        let p = self.ads.params();
-        let center = p
-            .center
-            .map_or_else(|| "bounds centre".to_owned(), |c| c.to_string());
+        let p = &self.params;
+        let center = p.center.map_or_else(
+            || "bounds centre".to_owned(),
+            |c| dirt_math::Vec3::from_array(c).to_string(),
+        );
         format!(
             "{} views, resolution {}, {} buckets, tile {}, centre {center}",
-            self.ads.views, p.resolution, p.buckets, p.tile
+            p.views, p.resolution, p.buckets, p.tile
         )
     }
 
@@ -609,7 +528,7 @@ impl Report<'_> {
             self.seed,
             self.params_words(),
             self.repeat,
-            self.threads,
+            self.cpu_threads,
             self.gpu_words()
         );
         s.push('\n');
@@ -617,26 +536,37 @@ impl Report<'_> {
             "| backend | traversal | build ms | trace ms | Mrays/s | rays | tiles/ray | buckets/ray | tests/ray | mismatches vs brute | mismatches vs cpu | stats ≠ cpu |\n",
         );
         s.push_str("|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n");
-        for r in self.rows {
+        let has_truth = self.brute_rays > 0;
+        for r in &self.rows {
+            let t = &r.trace;
+            let build_ms = self
+                .builds
+                .iter()
+                .find(|b| b.backend == t.backend)
+                .and_then(|b| b.stages_ms);
             let _ = writeln!(
                 s,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                r.backend,
-                r.traversal.unwrap_or("—"),
-                opt(r.build_ms, 2),
-                fixed(r.trace_ms, 2),
-                significant(r.mrays(), 4),
-                r.rays,
-                opt(r.tiles, 2),
-                opt(r.buckets, 2),
-                fixed(r.tests, 2),
-                if r.backend == "brute" {
+                t.backend,
+                if t.traversal.is_empty() {
+                    "—"
+                } else {
+                    &t.traversal
+                },
+                opt(build_ms, 2),
+                fixed(t.trace_ms, 2),
+                significant(t.mrays_per_s, 4),
+                t.rays,
+                opt(t.tiles_per_ray, 2),
+                opt(t.buckets_per_ray, 2),
+                opt(t.tests_per_ray, 2),
+                if t.backend == "brute" {
                     "reference".to_owned()
                 } else {
-                    mismatch_cell(r.vs_brute)
+                    count_cell(has_truth.then_some((t.differ, t.compared)))
                 },
-                mismatch_cell(r.vs_cpu),
-                mismatch_cell(r.stats_vs_cpu)
+                count_cell(r.mismatches_vs_cpu.map(|d| (d.differ, d.compared))),
+                count_cell(r.stats_mismatches_vs_cpu.map(|d| (d.differ, d.compared)))
             );
         }
         if !self.builds.is_empty() {
@@ -645,17 +575,17 @@ impl Report<'_> {
                 "| build | fill_depth ms | mip_depth ms | fill_primitives ms | total ms | wall ms | list nodes |\n",
             );
             s.push_str("|---|--:|--:|--:|--:|--:|--:|\n");
-            for b in self.builds {
+            for b in &self.builds {
                 let _ = writeln!(
                     s,
                     "| {} | {} | {} | {} | {} | {} | {} |",
                     b.backend,
-                    fixed(b.fill_depth, 2),
-                    fixed(b.mip_depth, 2),
-                    fixed(b.fill_primitives, 2),
-                    fixed(b.total, 2),
-                    fixed(b.wall, 2),
-                    b.nodes
+                    opt(b.fill_depth_ms, 2),
+                    opt(b.mip_depth_ms, 2),
+                    opt(b.fill_primitives_ms, 2),
+                    opt(b.stages_ms, 2),
+                    fixed(b.build_ms, 2),
+                    b.nodes.map_or_else(|| "—".to_owned(), |n| n.to_string())
                 );
             }
         }
@@ -667,7 +597,7 @@ impl Report<'_> {
              (gpu: uploads, dispatches and read-back included). ",
             self.repeat
         );
-        let brute_timed = self.rows.iter().any(|r| r.backend == "brute");
+        let brute_timed = self.rows.iter().any(|r| r.trace.backend == "brute");
         if self.brute_rays == 0 {
             s.push_str("No ground truth (--brute-rays 0). ");
         } else {
@@ -691,128 +621,6 @@ impl Report<'_> {
         );
         s
     }
-
-    fn json(&self) -> String {
-        let p = self.ads.params();
-        let center = p.center.map_or_else(
-            || "null".to_owned(),
-            |c| {
-                format!(
-                    "[{}, {}, {}]",
-                    jf(c.x.into()),
-                    jf(c.y.into()),
-                    jf(c.z.into())
-                )
-            },
-        );
-        let (gpu, gpu_exact, gpu_error) = match self.gpu {
-            GpuState::NotRequested => ("null".to_owned(), "null", "null".to_owned()),
-            GpuState::Unavailable(reason) => ("null".to_owned(), "null", json_str(reason)),
-            GpuState::Used { adapter, exact } => (
-                json_str(adapter),
-                if *exact { "true" } else { "false" },
-                "null".to_owned(),
-            ),
-        };
-        let mut s = String::new();
-        let _ = writeln!(s, "{{");
-        let _ = writeln!(s, "  \"scene\": {},", json_str(self.scene));
-        let _ = writeln!(s, "  \"triangles\": {},", self.triangles);
-        let _ = writeln!(s, "  \"rays\": {},", self.rays);
-        let _ = writeln!(s, "  \"kind\": {},", json_str(&self.kind));
-        let _ = writeln!(s, "  \"seed\": {},", self.seed);
-        let _ = writeln!(
-            s,
-            "  \"params\": {{\"views\": {}, \"resolution\": {}, \"buckets\": {}, \"tile\": {}, \"center\": {center}}},",
-            json_str(&self.ads.views.to_string()),
-            p.resolution,
-            p.buckets,
-            p.tile
-        );
-        let _ = writeln!(s, "  \"repeat\": {},", self.repeat);
-        let _ = writeln!(s, "  \"brute_rays\": {},", self.brute_rays);
-        let _ = writeln!(s, "  \"cpu_threads\": {},", self.threads);
-        let _ = writeln!(s, "  \"gpu\": {gpu},");
-        let _ = writeln!(s, "  \"gpu_exact\": {gpu_exact},");
-        let _ = writeln!(s, "  \"gpu_error\": {gpu_error},");
-        let builds: Vec<String> = self
-            .builds
-            .iter()
-            .map(|b| {
-                format!(
-                    "    {{\"backend\": {}, \"fill_depth_ms\": {}, \"mip_depth_ms\": {}, \"fill_primitives_ms\": {}, \"total_ms\": {}, \"wall_ms\": {}, \"nodes\": {}}}",
-                    json_str(b.backend),
-                    jf(b.fill_depth),
-                    jf(b.mip_depth),
-                    jf(b.fill_primitives),
-                    jf(b.total),
-                    jf(b.wall),
-                    b.nodes
-                )
-            })
-            .collect();
-        let _ = writeln!(s, "  \"builds\": [\n{}\n  ],", builds.join(",\n"));
-        let mism = |m: Option<Mismatch>| {
-            m.map_or_else(
-                || "null".to_owned(),
-                |m| format!("{{\"differ\": {}, \"of\": {}}}", m.differ, m.of),
-            )
-        };
-        let rows: Vec<String> = self
-            .rows
-            .iter()
-            .map(|r| {
-                format!(
-                    "    {{\"backend\": {}, \"traversal\": {}, \"build_ms\": {}, \"trace_ms\": {}, \"mrays_per_s\": {}, \"rays\": {}, \"tiles_per_ray\": {}, \"buckets_per_ray\": {}, \"tests_per_ray\": {}, \"mismatches_vs_brute\": {}, \"mismatches_vs_cpu\": {}, \"stats_mismatches_vs_cpu\": {}}}",
-                    json_str(r.backend),
-                    r.traversal.map_or_else(|| "null".to_owned(), json_str),
-                    r.build_ms.map_or_else(|| "null".to_owned(), jf),
-                    jf(r.trace_ms),
-                    jf(r.mrays()),
-                    r.rays,
-                    r.tiles.map_or_else(|| "null".to_owned(), jf),
-                    r.buckets.map_or_else(|| "null".to_owned(), jf),
-                    jf(r.tests),
-                    mism(r.vs_brute),
-                    mism(r.vs_cpu),
-                    mism(r.stats_vs_cpu)
-                )
-            })
-            .collect();
-        let _ = writeln!(s, "  \"rows\": [\n{}\n  ]", rows.join(",\n"));
-        let _ = writeln!(s, "}}");
-        s
-    }
-}
-
-/// A JSON number (`null` when not finite).
-fn jf(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x}")
-    } else {
-        "null".to_owned()
-    }
-}
-
-/// A JSON string literal.
-fn json_str(text: &str) -> String {
-    let mut out = String::with_capacity(text.len() + 2);
-    out.push('"');
-    for c in text.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\r' => out.push_str("\\r"),
-            '\t' => out.push_str("\\t"),
-            c if u32::from(c) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", u32::from(c));
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
 }
 
 #[cfg(test)]
@@ -867,33 +675,6 @@ mod tests {
     }
 
     #[test]
-    fn median_of_odd_and_even() {
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
-        assert!(median(Vec::new()).is_nan());
-    }
-
-    #[test]
-    fn mismatches_count_any_bit() {
-        let a = Hit {
-            prim: 1,
-            t: 1.0,
-            u: 0.25,
-            v: 0.5,
-        };
-        let mut b = a;
-        b.v = f32::from_bits(a.v.to_bits() + 1);
-        let m = mismatches(&[a, a, Hit::MISS], &[a, b, Hit::MISS]);
-        assert_eq!((m.differ, m.of), (1, 3));
-        // -0.0 == 0.0 as floats, but not as bits.
-        let mut z = a;
-        z.u = 0.0;
-        let mut nz = a;
-        nz.u = -0.0;
-        assert_eq!(mismatches(&[z], &[nz]).differ, 1);
-    }
-
-    #[test]
     fn rates_keep_their_significant_digits() {
         assert_eq!(significant(0.000956, 4), "0.0009560");
         assert_eq!(significant(0.4263, 4), "0.4263");
@@ -904,9 +685,29 @@ mod tests {
     }
 
     #[test]
-    fn json_strings_are_escaped() {
-        assert_eq!(json_str("a\"b\\c\nd\u{1}"), "\"a\\\"b\\\\c\\nd\\u0001\"");
-        assert_eq!(jf(1.5), "1.5");
-        assert_eq!(jf(f64::NAN), "null");
+    fn json_rows_are_the_evaluation_rows_and_the_cpu_comparisons() {
+        let m = TraceMeasure {
+            rays: 4,
+            trace_ms: 2.0,
+            ..TraceMeasure::default()
+        };
+        let subject = Subject {
+            backend: "gpu".into(),
+            ..Subject::default()
+        }
+        .with_traversal(Traversal::HiZ);
+        let row = Row {
+            trace: TraceRow::new(&subject, "mixed", &m, Disagreement::default()),
+            mismatches_vs_cpu: Some(Disagreement::default()),
+            stats_mismatches_vs_cpu: None,
+        };
+        let v = serde_json::to_value(&row).expect("serializes");
+        assert_eq!(v["backend"], "gpu");
+        assert_eq!(v["traversal"], "hiz");
+        assert_eq!(v["ray_type"], "mixed");
+        assert_eq!(v["mrays_per_s"], 0.002);
+        assert_eq!(v["differ"], 0);
+        assert_eq!(v["mismatches_vs_cpu"]["compared"], 0);
+        assert!(v["stats_mismatches_vs_cpu"].is_null());
     }
 }
