@@ -60,6 +60,10 @@ pub enum EvalError {
         #[source]
         source: dirt_core::CoreError,
     },
+    /// A peer library's own error, in its words (the source of a
+    /// `CoreError::Backend` naming the peer).
+    #[error("{0}")]
+    Peer(String),
     #[error("scene {scene}: cannot trace: {source}")]
     Trace {
         scene: String,

@@ -175,21 +175,8 @@ pub mod embree {
     }
 
     /// What Embree refused, with its error code.
-    #[derive(Debug, thiserror::Error)]
-    #[error("{what}: {code}")]
-    pub struct EmbreeError {
-        what: &'static str,
-        code: String,
-    }
-
-    fn err(what: &'static str, e: impl std::fmt::Debug) -> CoreError {
-        CoreError::backend(
-            "embree",
-            EmbreeError {
-                what,
-                code: format!("{e:?}"),
-            },
-        )
+    fn err(what: &str, e: impl std::fmt::Debug) -> CoreError {
+        CoreError::backend("embree", crate::EvalError::Peer(format!("{what}: {e:?}")))
     }
 
     impl Embree {
