@@ -16,6 +16,24 @@ pub struct Gpu {
 }
 
 impl Gpu {
+    /// [`Gpu::new`], with the error in words. A panic inside the driver stack
+    /// counts as no usable GPU, not as a crash: callers that fall back to the
+    /// CPU (the command line) or skip (the tests) need only the reason.
+    pub fn open() -> Result<Gpu, String> {
+        match std::panic::catch_unwind(Gpu::new) {
+            Ok(Ok(gpu)) => Ok(gpu),
+            Ok(Err(e)) => Err(e.to_string()),
+            Err(panic) => Err(panic
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .map_or_else(
+                    || "the GPU stack panicked".to_owned(),
+                    |m| format!("the GPU stack panicked: {m}"),
+                )),
+        }
+    }
+
     /// Finds an adapter (honouring `WGPU_BACKEND`, e.g. `vulkan`) and opens it.
     pub fn new() -> Result<Gpu, GpuError> {
         pollster::block_on(Self::new_async())

@@ -170,20 +170,11 @@ pub fn check(test: &str, need: Need, adapter: Result<&AdapterFacts, &str>) -> bo
 /// or why there is none. A panic inside the driver stack counts as no adapter.
 fn shared() -> Result<&'static (Gpu, AdapterFacts), &'static str> {
     static GPU: OnceLock<Result<(Gpu, AdapterFacts), String>> = OnceLock::new();
-    GPU.get_or_init(|| match std::panic::catch_unwind(Gpu::new) {
-        Ok(Ok(gpu)) => {
+    GPU.get_or_init(|| {
+        Gpu::open().map(|gpu| {
             let facts = AdapterFacts::of(&gpu);
-            Ok((gpu, facts))
-        }
-        Ok(Err(e)) => Err(e.to_string()),
-        Err(panic) => Err(panic
-            .downcast_ref::<&str>()
-            .map(|s| (*s).to_owned())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .map_or_else(
-                || "the GPU stack panicked".to_owned(),
-                |m| format!("the GPU stack panicked: {m}"),
-            )),
+            (gpu, facts)
+        })
     })
     .as_ref()
     .map_err(String::as_str)

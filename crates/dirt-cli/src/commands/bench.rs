@@ -233,7 +233,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
 
     // GPU.
     let gpu_state = if backends.contains(&Backend::Gpu) {
-        match crate::gpu::open_gpu() {
+        match Gpu::open() {
             Ok(gpu) => {
                 eprintln!("{}", crate::gpu::gpu_line(&gpu));
                 let adapter = gpu.describe();

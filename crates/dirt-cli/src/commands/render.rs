@@ -8,14 +8,14 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use dirt_core::{Tracer, Traversal};
 use dirt_cpu::{DirtCpu, brute_force::Brute};
-use dirt_gpu::DirtGpu;
+use dirt_gpu::{DirtGpu, Gpu};
 use dirt_math::Vec3;
 use dirt_render::reference::Reference;
 use dirt_render::{Camera, Mode, Renderer, Settings};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::args::{AdsArgs, SceneArg};
-use crate::gpu::{fallback_line, gpu_line, open_gpu};
+use crate::gpu::{fallback_line, gpu_line};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -133,7 +133,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let traversal = args.traversal;
     let tris = &scene.triangles;
     let gpu = match args.backend {
-        RenderBackend::Auto | RenderBackend::Gpu => match open_gpu() {
+        RenderBackend::Auto | RenderBackend::Gpu => match Gpu::open() {
             Ok(g) => {
                 // The adapter's type by name: wgpu is not a dependency of the CLI.
                 let software = g.is_llvmpipe() || format!("{:?}", g.info.device_type) == "Cpu";

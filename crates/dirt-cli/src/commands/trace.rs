@@ -10,12 +10,12 @@ use clap::{Args, ValueEnum};
 use dirt_core::{BuildReport, Tracer, Traversal};
 use dirt_cpu::DirtCpu;
 use dirt_cpu::brute_force::Brute;
-use dirt_gpu::DirtGpu;
+use dirt_gpu::{DirtGpu, Gpu};
 use dirt_math::{Hit, Ray};
 
 use crate::args::{AdsArgs, SceneArg};
 use crate::commands::millis;
-use crate::gpu::{fallback_line, gpu_line, open_gpu};
+use crate::gpu::{fallback_line, gpu_line};
 use dirt_cli::npy;
 
 #[derive(Debug, Args)]
@@ -73,7 +73,7 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     );
     let tris = &scene.triangles;
     let gpu = match args.backend {
-        Backend::Gpu => match open_gpu() {
+        Backend::Gpu => match Gpu::open() {
             Ok(gpu) => {
                 eprintln!("{}", gpu_line(&gpu));
                 Some(gpu)
