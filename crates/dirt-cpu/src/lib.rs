@@ -18,6 +18,7 @@ pub mod fill_depth;
 pub mod fill_primitives;
 pub mod mip_depth;
 pub mod trace;
+mod trace_fast;
 pub mod tracer;
 
 pub use cache::{BuildCache, Geometry, Reuse};

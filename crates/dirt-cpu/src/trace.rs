@@ -9,8 +9,16 @@
 //! them is tested. Termination only when the entry of the next view, band,
 //! cell or bucket lies beyond the best hit found (design brief §2), so the
 //! result equals the brute-force closest hit.
+//!
+//! The loops of this module ([`trace_ray_plain`]) are the stage as `trace.wgsl`
+//! mirrors it, line for line. [`trace`], [`trace_into`], [`trace_with_stats`]
+//! and [`trace_ray`] run `trace_fast`: the same operations in the
+//! same order without the per-ray allocations, counting and repeated
+//! clipping, so the same hits and the same statistics, bit for bit
+//! (`tests/trace_fast.rs`).
 
 use crate::Ads;
+use crate::trace_fast::{self, Scene, Scratch};
 use dirt_core::{RayStats, Traversal};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
 use dirt_math::clip::{Interval, clip_ray_to_view, ray_depth};
@@ -24,9 +32,9 @@ use std::cell::Cell;
 
 /// Closest hits of `rays`. Rays that fail [`Ray::validate`] miss.
 pub fn trace(ads: &Ads, tris: &[Triangle], rays: &[Ray], traversal: Traversal) -> Vec<Hit> {
-    rays.par_iter()
-        .map(|r| trace_ray(ads, tris, r, traversal, &mut RayStats::default()))
-        .collect()
+    let mut hits = vec![Hit::MISS; rays.len()];
+    trace_into(ads, tris, rays, traversal, &mut hits, None);
+    hits
 }
 
 /// [`trace`] with per-ray statistics.
@@ -36,18 +44,45 @@ pub fn trace_with_stats(
     rays: &[Ray],
     traversal: Traversal,
 ) -> (Vec<Hit>, Vec<RayStats>) {
-    rays.par_iter()
-        .map(|r| {
-            let mut s = RayStats::default();
-            let h = trace_ray(ads, tris, r, traversal, &mut s);
-            (h, s)
-        })
-        .unzip()
+    let mut hits = vec![Hit::MISS; rays.len()];
+    let mut stats = vec![RayStats::default(); rays.len()];
+    trace_into(ads, tris, rays, traversal, &mut hits, Some(&mut stats));
+    (hits, stats)
 }
 
 /// [`trace`] into caller-owned buffers, with per-ray statistics when `stats`
-/// is given. `hits` (and `stats`) must hold one entry per ray.
+/// is given. `hits` (and `stats`) must hold one entry per ray; every entry is
+/// written (a ray that fails [`Ray::validate`] gets zero statistics).
 pub fn trace_into(
+    ads: &Ads,
+    tris: &[Triangle],
+    rays: &[Ray],
+    traversal: Traversal,
+    hits: &mut [Hit],
+    stats: Option<&mut [RayStats]>,
+) {
+    let Some(sc) = Scene::new(ads, tris) else {
+        // A view set or pyramid larger than the fast path's arrays.
+        return plain_into(ads, tris, rays, traversal, hits, stats);
+    };
+    match stats {
+        Some(stats) => rays
+            .par_iter()
+            .zip(hits.par_iter_mut())
+            .zip(stats.par_iter_mut())
+            .for_each_init(Scratch::new, |scratch, ((r, h), s)| {
+                (*h, *s) = trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
+            }),
+        None => rays
+            .par_iter()
+            .zip(hits.par_iter_mut())
+            .for_each_init(Scratch::new, |scratch, (r, h)| {
+                *h = trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
+            }),
+    }
+}
+
+fn plain_into(
     ads: &Ads,
     tris: &[Triangle],
     rays: &[Ray],
@@ -60,11 +95,36 @@ pub fn trace_into(
             .par_iter()
             .zip(hits.par_iter_mut())
             .zip(stats.par_iter_mut())
-            .for_each(|((r, h), s)| *h = trace_ray(ads, tris, r, traversal, s)),
-        None => rays
-            .par_iter()
-            .zip(hits.par_iter_mut())
-            .for_each(|(r, h)| *h = trace_ray(ads, tris, r, traversal, &mut RayStats::default())),
+            .for_each(|((r, h), s)| {
+                *s = RayStats::default();
+                *h = trace_ray_plain(ads, tris, r, traversal, s)
+            }),
+        None => rays.par_iter().zip(hits.par_iter_mut()).for_each(|(r, h)| {
+            *h = trace_ray_plain(ads, tris, r, traversal, &mut RayStats::default())
+        }),
+    }
+}
+
+/// One ray; `stats` is overwritten with its statistics (zero for a ray that
+/// fails [`Ray::validate`]). For many rays, [`trace_into`] gathers what the
+/// rays share once.
+pub fn trace_ray(
+    ads: &Ads,
+    tris: &[Triangle],
+    ray: &Ray,
+    traversal: Traversal,
+    stats: &mut RayStats,
+) -> Hit {
+    match Scene::new(ads, tris) {
+        Some(sc) => {
+            let (h, s) = trace_fast::trace_ray::<true>(&sc, &mut Scratch::new(), ray, traversal);
+            *stats = s;
+            h
+        }
+        None => {
+            *stats = RayStats::default();
+            trace_ray_plain(ads, tris, ray, traversal, stats)
+        }
     }
 }
 
@@ -77,8 +137,10 @@ struct Ctx<'a> {
     stats: Cell<RayStats>,
 }
 
-/// One ray.
-pub fn trace_ray(
+/// One ray through the plain stage: the loops `trace.wgsl` mirrors, and the
+/// reference [`trace_ray`] is tested against. `stats` is overwritten with the
+/// ray's statistics, except for a ray that fails [`Ray::validate`].
+pub fn trace_ray_plain(
     ads: &Ads,
     tris: &[Triangle],
     ray: &Ray,

@@ -1,0 +1,783 @@
+//! The `trace` stage without the per-ray overhead of the plain loops in
+//! [`crate::trace`](mod@crate::trace). Every float operation that decides
+//! anything is the plain stage's, with the same operands in the same order,
+//! so the hits *and* the per-ray statistics are bit-identical to it (and so
+//! to `trace.wgsl`); `tests/trace_fast.rs` checks that on random scenes, rays
+//! and parameters. What differs is only where values live, how often they are
+//! computed, and which of them the compiler can put side by side in one
+//! vector register:
+//!
+//! - Nothing is allocated per ray: the per-view rays, intervals and exits
+//!   live in arrays of [`MAX_VIEWS`]; the Hi-Z stack (bounded by the walk's
+//!   depth, `3·levels + 1`) is allocated once per thread and reused.
+//! - Statistics are a const parameter: with `STATS = false` the counting is
+//!   compiled out.
+//! - Clipping by cuts. What one half-space does to a ray interval — the `t`
+//!   where the ray crosses it, and whether that raises `t0`, lowers `t1`, or
+//!   empties the interval — depends only on the half-space and the ray
+//!   ([`Cut`], [`Interval::clip`] split in two). Cuts are computed without
+//!   branches, several half-spaces as lanes of one vector ([`cut_lanes`]), and
+//!   applied in the plain stage's order. Where the plain stage returns `EMPTY`
+//!   as soon as an interval is empty, checking once at the end gives the same
+//!   result: `t0` only rises and `t1` only falls, and neither is ever NaN.
+//! - A Hi-Z child shares two of its four side half-spaces with its parent and
+//!   the other two with a sibling, so an expansion computes only the four
+//!   through the parent's middle ([`HiZCell::clip`] computed all four for
+//!   every cell popped). The tests that do not depend on the best hit (empty
+//!   interval, depth span against the cell's bounds) are made for the four
+//!   children together, as lanes, when their parent is expanded, and only the
+//!   cells that pass wait on the stack; the test against the best hit stays
+//!   where the plain stage makes it, when a cell is popped. The same cells
+//!   are visited in the same order.
+//! - The linear walk keeps a tile's pair of minor-axis cuts for the next
+//!   band, whose first tile is usually the last tile of this one; both ends
+//!   of a band are projected as four lanes ([`tile_xy2`]).
+//! - Tile boundary slopes ([`View::boundary`]) come from a table made once per
+//!   `trace` call; `floor_index` runs without a call to `floorf` (the x86-64
+//!   baseline has no rounding instruction), returning the same index for
+//!   every input, NaN and infinities included.
+//!
+//! [`HiZCell::clip`]: dirt_math::dda::HiZCell::clip
+
+use crate::Ads;
+use dirt_core::{RayStats, Traversal};
+use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
+use dirt_math::clip::{HalfSpace, Interval, ray_depth, view_frustum};
+use dirt_math::dda::{child_order, dilation, hiz_width};
+use dirt_math::encode::ordered_to_f32;
+use dirt_math::num::{fmax, fmin};
+use dirt_math::triangle::{RayShear, intersect_closest};
+use dirt_math::{Hit, Ray, Triangle, View, ViewRay};
+use std::array::from_fn;
+
+/// Most views a view set has (the cube); larger sets take the plain stage.
+pub(crate) const MAX_VIEWS: usize = 6;
+
+/// Most Hi-Z levels the fast path takes (`2^31` tiles per side); more take the plain stage.
+const MAX_LEVELS: usize = 32;
+
+/// Depth of the Hi-Z stack: at most three siblings wait per level, plus the
+/// cell on top; one more slot, because a child is written before it is known
+/// whether it is kept.
+const STACK: usize = 3 * MAX_LEVELS + 2;
+
+/// What a ray trace needs of the structure, gathered once per `trace` call.
+pub(crate) struct Scene<'a> {
+    ads: &'a Ads,
+    tris: &'a [Triangle],
+    views: &'a [View],
+    /// Cells per side of each Hi-Z level.
+    widths: [u32; MAX_LEVELS],
+    levels: u32,
+    buckets: u32,
+    /// Per view, the slope of every tile boundary ([`View::boundary`]).
+    slopes: Vec<Vec<f32>>,
+}
+
+impl<'a> Scene<'a> {
+    /// `None` when the view set is larger than the fast path's arrays.
+    pub(crate) fn new(ads: &'a Ads, tris: &'a [Triangle]) -> Option<Self> {
+        let views = &ads.views.views[..];
+        let levels = ads.hiz.len();
+        if views.len() > MAX_VIEWS || levels == 0 || levels > MAX_LEVELS {
+            return None;
+        }
+        let tiles = ads.params.tiles();
+        let mut widths = [0; MAX_LEVELS];
+        for (l, w) in widths.iter_mut().enumerate().take(levels) {
+            *w = hiz_width(tiles, l as u32);
+        }
+        let slopes = views
+            .iter()
+            .map(|v| (0..=v.tiles).map(|k| v.boundary(k)).collect())
+            .collect();
+        Some(Scene {
+            ads,
+            tris,
+            views,
+            widths,
+            levels: levels as u32,
+            buckets: ads.params.buckets,
+            slopes,
+        })
+    }
+}
+
+/// What one half-space does to a ray interval: `t0` rises to `lo` when
+/// `lo > t0`, `t1` falls to `hi` when `hi < t1`. Exactly [`Interval::clip`]
+/// with the same `eval`, `slope` and division, split into the part that
+/// depends only on the half-space and the ray and the part that applies it.
+#[derive(Clone, Copy, Debug)]
+struct Cut {
+    lo: f32,
+    hi: f32,
+}
+
+impl Cut {
+    const NONE: Cut = Cut {
+        lo: f32::NEG_INFINITY,
+        hi: f32::INFINITY,
+    };
+
+    #[inline]
+    fn of(h: &HalfSpace, vr: &ViewRay) -> Cut {
+        Cut::from_parts(h.eval(vr.o, vr.eps), h.slope(vr.d))
+    }
+
+    /// The cut of a half-space whose value along the ray is `f0 + t·f1`:
+    /// [`Interval::clip`]'s branches as selects (`-f0 / f1` is computed even
+    /// where it is not used; it raises no trap).
+    #[inline]
+    fn from_parts(f0: f32, f1: f32) -> Cut {
+        let t = -f0 / f1;
+        Cut {
+            lo: cut_lo(f0, f1, t),
+            hi: cut_hi(f0, f1, t),
+        }
+    }
+
+    /// The cuts `[Lo x, Hi x, Lo y, Hi y]` of the side half-spaces of slope
+    /// `sx` in x and `sy` in y.
+    #[inline]
+    fn sides(vr: &ViewRay, sx: f32, sy: f32) -> [Cut; 4] {
+        let (o, d) = (vr.o, vr.d);
+        let (px, py) = (sx * o[2], sy * o[2]);
+        let (qx, qy) = (sx * d[2], sy * d[2]);
+        // Lo: p[axis] - s·p[2] + eps, slope d[axis] - s·d[2]; Hi: the differences swapped.
+        let (lo, hi) = cut_lanes(
+            [o[0], px, o[1], py],
+            [px, o[0], py, o[1]],
+            [d[0], qx, d[1], qy],
+            [qx, d[0], qy, d[1]],
+            vr.eps,
+        );
+        from_fn(|k| Cut {
+            lo: lo[k],
+            hi: hi[k],
+        })
+    }
+
+    #[inline]
+    fn apply(self, iv: &mut Interval) {
+        if self.lo > iv.t0 {
+            iv.t0 = self.lo;
+        }
+        if self.hi < iv.t1 {
+            iv.t1 = self.hi;
+        }
+    }
+}
+
+/// `lo` of [`Cut::from_parts`]: `t` when the half-space is entered (`f1 > 0`),
+/// `+inf` (empty) when parallel and outside, else no bound.
+#[inline(always)]
+fn cut_lo(f0: f32, f1: f32, t: f32) -> f32 {
+    let parallel = if f0 >= 0.0 {
+        f32::NEG_INFINITY
+    } else {
+        f32::INFINITY
+    };
+    let other = if f1 < 0.0 {
+        f32::NEG_INFINITY
+    } else {
+        parallel
+    };
+    if f1 > 0.0 { t } else { other }
+}
+
+/// `hi` of [`Cut::from_parts`]: `t` when the half-space is left (`f1 < 0`),
+/// `-inf` (empty) when parallel and outside, else no bound.
+#[inline(always)]
+fn cut_hi(f0: f32, f1: f32, t: f32) -> f32 {
+    let parallel = if f0 >= 0.0 {
+        f32::INFINITY
+    } else {
+        f32::NEG_INFINITY
+    };
+    let other = if f1 > 0.0 { f32::INFINITY } else { parallel };
+    if f1 < 0.0 { t } else { other }
+}
+
+/// The cuts of `N` half-spaces whose values along the ray are
+/// `f0 = (a - b) + eps` and `f1 = c - e` ([`HalfSpace::eval`] and
+/// [`HalfSpace::slope`] with their operands in these places), as lanes the
+/// compiler can put in one vector: `(lo, hi)`.
+#[inline(always)]
+fn cut_lanes<const N: usize>(
+    a: [f32; N],
+    b: [f32; N],
+    c: [f32; N],
+    e: [f32; N],
+    eps: f32,
+) -> ([f32; N], [f32; N]) {
+    let f0: [f32; N] = from_fn(|k| a[k] - b[k] + eps);
+    let f1: [f32; N] = from_fn(|k| c[k] - e[k]);
+    let t: [f32; N] = from_fn(|k| -f0[k] / f1[k]);
+    (
+        from_fn(|k| cut_lo(f0[k], f1[k], t[k])),
+        from_fn(|k| cut_hi(f0[k], f1[k], t[k])),
+    )
+}
+
+/// [`tile_xy`](dirt_math::dda::tile_xy) at `ta` and at `tb`, as four lanes `[xa, ya, xb, yb]`.
+#[inline(always)]
+fn tile_xy2(v: &View, vr: &ViewRay, ta: f32, tb: f32) -> [f32; 4] {
+    let (o, d) = (vr.o, vr.d);
+    let near = v.near * 0.5;
+    let za = fmax(o[2] + ta * d[2], near);
+    let zb = fmax(o[2] + tb * d[2], near);
+    let oo = [o[0], o[1], o[0], o[1]];
+    let dd = [d[0], d[1], d[0], d[1]];
+    let tt = [ta, ta, tb, tb];
+    let zz = [za, za, zb, zb];
+    from_fn(|k| ((oo[k] + tt[k] * dd[k]) / zz[k] + v.tan) / v.step)
+}
+
+/// [`clip_ray_to_view`] with the six cuts of [`view_frustum`], applied in
+/// its order. The ray leaves through the last half-space that lowered `t1`
+/// (`hi < t1` is [`Interval::clip`]'s "moved `t1`"; a cut that empties the
+/// interval also counts, but then the interval is empty and there is no exit).
+///
+/// [`clip_ray_to_view`]: dirt_math::clip::clip_ray_to_view
+#[inline]
+fn clip_to_view(v: &View, vr: &ViewRay, tmin: f32, tmax: f32) -> (Interval, Option<usize>) {
+    let mut iv = Interval { t0: tmin, t1: tmax };
+    let mut exit = None;
+    let h = view_frustum(v);
+    let [x0, x1, y0, y1] = match (h[0], h[1], h[2], h[3]) {
+        (
+            HalfSpace::Lo { s: a, .. },
+            HalfSpace::Hi { s: b, .. },
+            HalfSpace::Lo { s: c, .. },
+            HalfSpace::Hi { s: d, .. },
+        ) => {
+            let (o, dir) = (vr.o, vr.d);
+            let (lo, hi) = cut_lanes(
+                [o[0], b * o[2], o[1], d * o[2]],
+                [a * o[2], o[0], c * o[2], o[1]],
+                [dir[0], b * dir[2], dir[1], d * dir[2]],
+                [a * dir[2], dir[0], c * dir[2], dir[1]],
+                vr.eps,
+            );
+            from_fn(|k| Cut {
+                lo: lo[k],
+                hi: hi[k],
+            })
+        }
+        _ => from_fn(|k| Cut::of(&h[k], vr)),
+    };
+    let cuts = [x0, x1, y0, y1, Cut::of(&h[4], vr), Cut::of(&h[5], vr)];
+    for (k, c) in cuts.into_iter().enumerate() {
+        if c.hi < iv.t1 {
+            exit = if k < 4 { Some(k) } else { None };
+        }
+        c.apply(&mut iv);
+    }
+    if iv.is_empty() {
+        (Interval::EMPTY, None)
+    } else {
+        (iv, exit)
+    }
+}
+
+/// `dirt_math::num::floor_index` (`floor(x)` clamped to `[0, last]`, NaN gives
+/// 0) without `floor`: `floor(x) >= L` is `x >= L` for the integer `L = last as f32`,
+/// and below it `floor` and truncation agree on `x >= 0`.
+#[inline]
+fn floor_index(x: f32, last: u32) -> u32 {
+    if x >= 0.0 {
+        if x >= last as f32 { last } else { x as u32 }
+    } else {
+        0
+    }
+}
+
+/// `dirt_math::dda::index_range` with [`floor_index`] above.
+#[inline]
+fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
+    let lo = fmin(a, b) - d;
+    let hi = fmax(a, b) + d;
+    if !(hi >= 0.0 && lo < tiles as f32) {
+        return None;
+    }
+    let last = tiles - 1;
+    Some((floor_index(lo, last), floor_index(hi, last)))
+}
+
+/// The ray's depth span over an interval, rounded outward by its `eps`.
+#[inline]
+fn depth_span(vr: &ViewRay, iv: Interval) -> (f32, f32) {
+    let za = ray_depth(vr, iv.t0);
+    let zb = ray_depth(vr, iv.t1);
+    (fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps)
+}
+
+/// A cell of the Hi-Z walk waiting on the stack: level, `i`, `j`, the ray's
+/// interval in it, and its four cuts.
+type Waiting = (u32, u32, u32, Interval, [Cut; 4]);
+
+/// Per-thread memory of the walk, reused from ray to ray: the Hi-Z stack
+/// (its length is kept apart, so pushing a child is a store and an add).
+#[derive(Debug)]
+pub(crate) struct Scratch {
+    stack: Vec<Waiting>,
+}
+
+impl Scratch {
+    pub(crate) fn new() -> Self {
+        Scratch {
+            stack: vec![(0, 0, 0, Interval::EMPTY, [Cut::NONE; 4]); STACK],
+        }
+    }
+}
+
+/// One ray in flight.
+struct RayState<'s, 'a, const STATS: bool> {
+    sc: &'s Scene<'a>,
+    scratch: &'s mut Scratch,
+    ray: &'s Ray,
+    sh: RayShear,
+    best: Hit,
+    stats: RayStats,
+}
+
+/// One ray, the same hit and statistics as [`crate::trace::trace_ray_plain`].
+#[inline]
+pub(crate) fn trace_ray<const STATS: bool>(
+    sc: &Scene<'_>,
+    scratch: &mut Scratch,
+    ray: &Ray,
+    traversal: Traversal,
+) -> (Hit, RayStats) {
+    if ray.validate().is_err() {
+        return (Hit::MISS, RayStats::default());
+    }
+    let views = sc.views;
+    let n = views.len();
+    let mut vrs = [ViewRay {
+        o: [0.0; 3],
+        d: [0.0; 3],
+        eps: 0.0,
+    }; MAX_VIEWS];
+    let mut ivs = [Interval::EMPTY; MAX_VIEWS];
+    let mut exits = [None; MAX_VIEWS];
+    for (f, v) in views.iter().enumerate() {
+        let vr = v.ray(ray);
+        if v.has_content {
+            (ivs[f], exits[f]) = clip_to_view(v, &vr, ray.tmin, ray.tmax);
+        }
+        vrs[f] = vr;
+    }
+    let mut st = RayState::<STATS> {
+        sc,
+        scratch,
+        ray,
+        sh: RayShear::new(ray),
+        best: Hit::MISS,
+        stats: RayStats::default(),
+    };
+    let mut visited = 0u32;
+    // The unvisited view the ray enters first (the first such on ties).
+    let first_unvisited = |visited: u32| -> Option<usize> {
+        let mut best: Option<usize> = None;
+        for f in 0..n {
+            if visited & (1 << f) == 0
+                && !ivs[f].is_empty()
+                && best.is_none_or(|b| ivs[f].t0 < ivs[b].t0)
+            {
+                best = Some(f);
+            }
+        }
+        best
+    };
+    let mut current = first_unvisited(visited);
+    while let Some(f) = current {
+        visited |= 1 << f;
+        if ivs[f].t0 <= st.best.t {
+            if STATS {
+                st.stats.views += 1;
+            }
+            match traversal {
+                Traversal::Linear => st.linear(f, &vrs[f], ivs[f]),
+                Traversal::HiZ => st.hiz(f, &vrs[f], ivs[f]),
+            }
+        }
+        // Across the edge the ray leaves through, else the next view it enters.
+        let adjacency = &sc.ads.views.adjacency;
+        current = match exits[f].map(|e| adjacency.get(f).map(|a| a[e] as usize)) {
+            Some(Some(g)) if visited & (1 << g) == 0 && !ivs[g].is_empty() => Some(g),
+            _ => first_unvisited(visited),
+        };
+    }
+    (st.best, st.stats)
+}
+
+impl<const STATS: bool> RayState<'_, '_, STATS> {
+    /// `dirt_math::dda::walk_tiles` with the plain stage's visitor, inlined.
+    /// Bands and tiles are clipped with [`Cut`]s; a tile's pair of minor-axis
+    /// cuts is kept for the next band, whose first tile is usually the last
+    /// tile of this one (module docs).
+    fn linear(&mut self, f: usize, vr: &ViewRay, iv: Interval) {
+        let sc = self.sc;
+        let v = &sc.views[f];
+        let slope = &sc.slopes[f][..];
+        if iv.is_empty() || v.tiles == 0 {
+            return;
+        }
+        let [ax, ay, bx, by] = tile_xy2(v, vr, iv.t0, iv.t1);
+        let (a, b) = ([ax, ay], [bx, by]);
+        let delta = dilation(v, vr, &iv);
+        let major = if (b[0] - a[0]).abs() >= (b[1] - a[1]).abs() {
+            0
+        } else {
+            1
+        };
+        let minor = 1 - major;
+        let Some((k0, k1)) = index_range(a[major], b[major], delta, v.tiles) else {
+            return;
+        };
+        let forward = b[major] >= a[major];
+        let minor_forward = b[minor] >= a[minor];
+        // Lo at boundary k and Hi at boundary k + 1 of an axis, as two lanes.
+        let (o, d) = (vr.o, vr.d);
+        let cuts = |axis: usize, k: u32| {
+            let (s0, s1) = (slope[k as usize], slope[k as usize + 1]);
+            let (lo, hi) = cut_lanes(
+                [o[axis], s1 * o[2]],
+                [s0 * o[2], o[axis]],
+                [d[axis], s1 * d[2]],
+                [s0 * d[2], d[axis]],
+                vr.eps,
+            );
+            (
+                Cut {
+                    lo: lo[0],
+                    hi: hi[0],
+                },
+                Cut {
+                    lo: lo[1],
+                    hi: hi[1],
+                },
+            )
+        };
+        let mut kept = (u32::MAX, Cut::NONE, Cut::NONE);
+        for n in 0..=(k1 - k0) {
+            let k = if forward { k0 + n } else { k1 - n };
+            let mut band = iv;
+            let (lo, hi) = cuts(major, k);
+            lo.apply(&mut band);
+            hi.apply(&mut band);
+            if band.is_empty() {
+                continue;
+            }
+            if band.t0 > self.best.t {
+                return;
+            }
+            let [px, py, qx, qy] = tile_xy2(v, vr, band.t0, band.t1);
+            let (p, q) = ([px, py], [qx, qy]);
+            let Some((m0, m1)) = index_range(p[minor], q[minor], delta, v.tiles) else {
+                continue;
+            };
+            for e in 0..=(m1 - m0) {
+                let m = if minor_forward { m0 + e } else { m1 - e };
+                if kept.0 != m {
+                    let (lo, hi) = cuts(minor, m);
+                    kept = (m, lo, hi);
+                }
+                let mut span = band;
+                kept.1.apply(&mut span);
+                kept.2.apply(&mut span);
+                if span.is_empty() {
+                    continue;
+                }
+                let (i, j) = if major == 0 { (k, m) } else { (m, k) };
+                self.visit_tile(v, vr, i, j, span);
+            }
+        }
+    }
+
+    /// The plain stage's Hi-Z walk: depth-first, front to back. A cell is
+    /// skipped when its interval is empty, when the ray's depth span there
+    /// misses the cell's `[zmin, zmax]`, or when it is entered after the best
+    /// hit. The first two do not depend on the best hit, so they are decided
+    /// for all four children when their parent is expanded, and only the
+    /// children that pass are pushed, with their interval; the third is
+    /// decided when a cell is popped, as in the plain stage. The same cells
+    /// are visited in the same order. Cell intervals come from cuts computed
+    /// once per expansion (module docs).
+    fn hiz(&mut self, f: usize, vr: &ViewRay, iv: Interval) {
+        let sc = self.sc;
+        let v = &sc.views[f];
+        let slope = &sc.slopes[f][..];
+        let tiles = v.tiles;
+        let slot = v.slot as usize;
+        // dirt_math::dda::projected_direction
+        let [ax, ay, bx, by] = tile_xy2(v, vr, iv.t0, iv.t1);
+        let (dx, dy) = (bx - ax, by - ay);
+        let order = child_order(dx, dy);
+        let lo = |axis: usize, k: u32| {
+            Cut::of(
+                &HalfSpace::Lo {
+                    axis,
+                    s: slope[k as usize],
+                },
+                vr,
+            )
+        };
+        let hi = |axis: usize, k: u32| {
+            Cut::of(
+                &HalfSpace::Hi {
+                    axis,
+                    s: slope[k as usize],
+                },
+                vr,
+            )
+        };
+        // The interval of a cell from its four cuts (in `block_frustum`'s
+        // order), if it is not empty and its depth span meets `[zmin, zmax]`.
+        let enter = |cuts: [Cut; 4], [zmin, zmax]: [u32; 2]| -> Option<Interval> {
+            let mut civ = iv;
+            for c in cuts {
+                c.apply(&mut civ);
+            }
+            let (zmin, zmax) = (ordered_to_f32(zmin), ordered_to_f32(zmax));
+            let (dlo, dhi) = depth_span(vr, civ);
+            (!civ.is_empty() && dhi >= zmin && dlo <= zmax).then_some(civ)
+        };
+        // Cells waiting, each with its interval and its x and y cuts: `stack[..len]`.
+        let mut len = 0;
+        // The root covers every tile: tiles [0, min(2^top, tiles)) = [0, tiles).
+        let top = sc.levels - 1;
+        let root_hi = (1u32 << top).min(tiles);
+        let root = [lo(0, 0), hi(0, root_hi), lo(1, 0), hi(1, root_hi)];
+        let w = sc.widths[top as usize] as usize;
+        if let Some(civ) = enter(root, sc.ads.hiz[top as usize][slot * w * w]) {
+            self.scratch.stack[0] = (top, 0, 0, civ, root);
+            len = 1;
+        }
+        while len > 0 {
+            len -= 1;
+            let (level, i, j, civ, [xl, xh, yl, yh]) = self.scratch.stack[len];
+            if civ.t0 > self.best.t {
+                continue;
+            }
+            if level == 0 {
+                self.visit_tile(v, vr, i, j, civ);
+                continue;
+            }
+            // Children: tiles [i0, mid) and [mid, i1) in x, same in y; the
+            // mid boundary clamped to the grid, where its cut is the parent's.
+            let c = level - 1;
+            let cw = sc.widths[c as usize];
+            let mx = ((2 * i + 1) << c).min(tiles);
+            let my = ((2 * j + 1) << c).min(tiles);
+            let [xlm, xhm, ylm, yhm] = Cut::sides(vr, slope[mx as usize], slope[my as usize]);
+            // Lane k: child (di, dj) = (k & 1, k >> 1); its cuts in block_frustum's order.
+            let cuts = [
+                [xl, xhm, yl, yhm],
+                [xlm, xh, yl, yhm],
+                [xl, xhm, ylm, yh],
+                [xlm, xh, ylm, yh],
+            ];
+            let cells = &sc.ads.hiz[c as usize];
+            let base = slot * (cw * cw) as usize;
+            // Children past the grid's edge read a neighbour's bounds and are dropped.
+            let (i0, i1) = (2 * i, (2 * i + 1).min(cw - 1));
+            let (j0, j1) = (2 * j, (2 * j + 1).min(cw - 1));
+            let z = [
+                cells[base + (j0 * cw + i0) as usize],
+                cells[base + (j0 * cw + i1) as usize],
+                cells[base + (j1 * cw + i0) as usize],
+                cells[base + (j1 * cw + i1) as usize],
+            ];
+            let exists = [
+                true,
+                2 * i + 1 < cw,
+                2 * j + 1 < cw,
+                2 * i + 1 < cw && 2 * j + 1 < cw,
+            ];
+            // Lane k: child k's interval (its cuts applied in order) and its depth test.
+            let mut t0 = [iv.t0; 4];
+            let mut t1 = [iv.t1; 4];
+            let by_position: [[Cut; 4]; 4] = from_fn(|q| from_fn(|k| cuts[k][q]));
+            for cut in by_position {
+                let lo: [f32; 4] = from_fn(|k| cut[k].lo);
+                let hi: [f32; 4] = from_fn(|k| cut[k].hi);
+                t0 = from_fn(|k| if lo[k] > t0[k] { lo[k] } else { t0[k] });
+                t1 = from_fn(|k| if hi[k] < t1[k] { hi[k] } else { t1[k] });
+            }
+            let zmin: [f32; 4] = from_fn(|k| ordered_to_f32(z[k][0]));
+            let zmax: [f32; 4] = from_fn(|k| ordered_to_f32(z[k][1]));
+            let za: [f32; 4] = from_fn(|k| ray_depth(vr, t0[k]));
+            let zb: [f32; 4] = from_fn(|k| ray_depth(vr, t1[k]));
+            let dlo: [f32; 4] = from_fn(|k| fmin(za[k], zb[k]) - vr.eps);
+            let dhi: [f32; 4] = from_fn(|k| fmax(za[k], zb[k]) + vr.eps);
+            let pass: [bool; 4] =
+                from_fn(|k| exists[k] && t0[k] <= t1[k] && dhi[k] >= zmin[k] && dlo[k] <= zmax[k]);
+            // Written whether kept or not: no branch on `pass`.
+            for &(di, dj) in order.iter().rev() {
+                let k = (dj * 2 + di) as usize;
+                let civ = Interval {
+                    t0: t0[k],
+                    t1: t1[k],
+                };
+                self.scratch.stack[len] = (c, 2 * i + di, 2 * j + dj, civ, cuts[k]);
+                len += usize::from(pass[k]);
+            }
+        }
+    }
+
+    fn visit_tile(&mut self, v: &View, vr: &ViewRay, i: u32, j: u32, iv: Interval) {
+        if STATS {
+            self.stats.tiles += 1;
+        }
+        let sc = self.sc;
+        let tile = v.slot as usize * v.tile_count() + (j * v.tiles + i) as usize;
+        let [zmin, zmax] = sc.ads.hiz[0][tile];
+        let (zmin, zmax) = (ordered_to_f32(zmin), ordered_to_f32(zmax));
+        let (lo, hi) = depth_span(vr, iv);
+        if !(hi >= zmin && lo <= zmax) {
+            return;
+        }
+        let nb = sc.buckets;
+        let b0 = bucket_of(lo, zmin, zmax, nb);
+        let b1 = bucket_of(hi, zmin, zmax, nb);
+        let ascending = vr.d[2] >= 0.0;
+        let lists = &sc.ads.lists;
+        let first = tile * nb as usize;
+        let mut best = self.best;
+        for n in 0..=(b1 - b0) {
+            let k = if ascending { b0 + n } else { b1 - n };
+            if best.is_hit() {
+                // Depth of the best hit on this ray; no point of a later bucket can be closer.
+                let zb = ray_depth(vr, best.t);
+                if ascending && bucket_floor_depth(k, zmin, zmax, nb) > zb + vr.eps {
+                    break;
+                }
+                if !ascending && bucket_ceil_depth(k, zmin, zmax, nb) < zb - vr.eps {
+                    break;
+                }
+            }
+            let list = first + k as usize;
+            let ids = &lists.ids[lists.offsets[list] as usize..lists.offsets[list + 1] as usize];
+            if STATS {
+                self.stats.buckets += 1;
+                self.stats.tests += ids.len() as u32;
+            }
+            for &id in ids {
+                intersect_closest(self.ray, &self.sh, &sc.tris[id as usize], id, &mut best);
+            }
+        }
+        self.best = best;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dirt_math::clip::clip_ray_to_view;
+    use dirt_math::{Aabb, Vec3, ViewSet};
+    use proptest::prelude::*;
+
+    fn coord() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            -3.0f32..3.0,
+            Just(0.0),
+            Just(-0.0),
+            Just(1.0),
+            Just(-1.0),
+            Just(1e30),
+            Just(-1e-30)
+        ]
+    }
+
+    fn v3() -> impl Strategy<Value = Vec3> {
+        (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        // The cut form of the view clip, and the cut form of a tile's clip
+        // (Hi-Z cell, band, tile), give the plain functions' bits.
+        #[test]
+        fn cuts_clip_like_the_plain_functions(
+            o in v3(), d in v3(), tmin in prop_oneof![Just(0.0f32), 0.0f32..2.0],
+            tmax in prop_oneof![Just(f32::INFINITY), 0.0f32..5.0],
+            single in any::<bool>(), face in 0usize..6, tiles in 1u32..40, k in 0u32..41, l in 0u32..41,
+        ) {
+            let bounds = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
+            let vs = if single {
+                ViewSet::single(None, &bounds, tiles)
+            } else {
+                ViewSet::cube(Vec3::new(0.1, -0.2, 0.05), &bounds, tiles)
+            };
+            let v = &vs.views[face % vs.views.len()];
+            let ray = Ray::new(o, d, tmin, tmax);
+            let vr = v.ray(&ray);
+            let (a, ea) = clip_ray_to_view(v, &vr, tmin, tmax);
+            let (b, eb) = clip_to_view(v, &vr, tmin, tmax);
+            prop_assert_eq!((a.t0.to_bits(), a.t1.to_bits(), ea), (b.t0.to_bits(), b.t1.to_bits(), eb));
+            let (k, l) = (k.min(tiles), l.min(tiles));
+            let cell = dirt_math::clip::block_frustum(v, k.min(l), k.max(l), l.min(k), k.max(l));
+            let mut plain = a;
+            let mut cut = a;
+            for h in &cell {
+                plain.clip(h, &vr);
+                Cut::of(h, &vr).apply(&mut cut);
+            }
+            if plain.is_empty() {
+                prop_assert!(cut.is_empty());
+            } else {
+                prop_assert_eq!((plain.t0.to_bits(), plain.t1.to_bits()), (cut.t0.to_bits(), cut.t1.to_bits()));
+            }
+            let (sx, sy) = (v.boundary(k), v.boundary(l));
+            let sides = Cut::sides(&vr, sx, sy);
+            let planes = [
+                HalfSpace::Lo { axis: 0, s: sx },
+                HalfSpace::Hi { axis: 0, s: sx },
+                HalfSpace::Lo { axis: 1, s: sy },
+                HalfSpace::Hi { axis: 1, s: sy },
+            ];
+            for (c, h) in sides.iter().zip(&planes) {
+                let one = Cut::of(h, &vr);
+                prop_assert_eq!((c.lo.to_bits(), c.hi.to_bits()), (one.lo.to_bits(), one.hi.to_bits()));
+            }
+        }
+    }
+
+    #[test]
+    fn floor_index_is_the_plain_one() {
+        let last = [0u32, 1, 7, 127, 4095, (1 << 24) - 1, u32::MAX];
+        let mut xs = vec![
+            0.0f32,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MIN,
+            1e-45,
+            -1e-45,
+        ];
+        for k in -300..300 {
+            let x = k as f32 * 0.5;
+            xs.extend([x, x.next_up(), x.next_down()]);
+        }
+        for e in 0..40 {
+            let x = (2.0f32).powi(e);
+            xs.extend([x, x.next_up(), x.next_down(), -x]);
+        }
+        for &x in &xs {
+            for &l in &last {
+                assert_eq!(
+                    floor_index(x, l),
+                    dirt_math::num::floor_index(x, l),
+                    "x = {x:e}, last = {l}"
+                );
+            }
+        }
+    }
+}
