@@ -65,6 +65,37 @@ pub fn trace_into(
         // A view set or pyramid larger than the fast path's arrays.
         return plain_into(ads, tris, rays, traversal, hits, stats);
     };
+    // Large batches run in a coherent order (nearby rays share cells, lists
+    // and triangles in cache); the results land in input order.
+    if let Some(order) = trace_fast::coherent_order(rays) {
+        let index = |o: &u64| (o & 0xffff_ffff) as usize;
+        match stats {
+            Some(stats) => {
+                let out: Vec<(Hit, RayStats)> = order
+                    .par_iter()
+                    .map_init(Scratch::new, |scratch, o| {
+                        trace_fast::trace_ray::<true>(&sc, scratch, &rays[index(o)], traversal)
+                    })
+                    .collect();
+                for (o, (h, s)) in order.iter().zip(out) {
+                    hits[index(o)] = h;
+                    stats[index(o)] = s;
+                }
+            }
+            None => {
+                let out: Vec<Hit> = order
+                    .par_iter()
+                    .map_init(Scratch::new, |scratch, o| {
+                        trace_fast::trace_ray::<false>(&sc, scratch, &rays[index(o)], traversal).0
+                    })
+                    .collect();
+                for (o, h) in order.iter().zip(out) {
+                    hits[index(o)] = h;
+                }
+            }
+        }
+        return;
+    }
     match stats {
         Some(stats) => rays
             .par_iter()

@@ -190,3 +190,25 @@ proptest! {
         check(&ads, &tris, &rs, &format!("{p:?} all views {all}"))?;
     }
 }
+
+// Batches of at least `ORDER_MIN_RAYS` (4096) rays are traced in a coherent
+// order; the results must still come back in input order, bit for bit.
+#[test]
+fn large_batches_in_coherent_order_are_the_plain_stage() {
+    let mut rng = Rng(99);
+    let tris = scene(300, &mut rng);
+    let rs = rays(6000, &tris, &mut rng);
+    for views in [ViewsKind::Cube, ViewsKind::Single] {
+        let p = AdsParams {
+            views,
+            resolution: 48,
+            buckets: 4,
+            tile: 1,
+            center: None,
+        };
+        let ads = Ads::build(&tris, &p).expect("valid parameters");
+        if let Err(e) = check(&ads, &tris, &rs, &format!("{p:?}")) {
+            panic!("{e}");
+        }
+    }
+}
