@@ -382,21 +382,29 @@ pub(crate) fn coherent_order(rays: &[Ray]) -> Option<Vec<u64>> {
     Some(order)
 }
 
-/// A cell of the Hi-Z walk waiting on the stack: level, `i`, `j`, the ray's
-/// interval in it, and its four cuts.
-type Waiting = (u32, u32, u32, Interval, [Cut; 4]);
+/// A cell of the Hi-Z walk waiting on the stack: level, `i`, `j`, and the
+/// ray's interval in it.
+type Waiting = (u32, u32, u32, Interval);
 
 /// Per-thread memory of the walk, reused from ray to ray: the Hi-Z stack
-/// (its length is kept apart, so pushing a child is a store and an add).
+/// (its length is kept apart, so pushing a child is a store and an add), and
+/// the side cuts of the cells of each level: `x[level][i & 1]` holds the
+/// (Lo, Hi) x cuts of cell `i` of that level, `y` likewise by `j`. They are
+/// written when the parent is expanded; depth first, every cell of a level
+/// on the stack has the same parent, the one expanded last at the level above.
 #[derive(Debug)]
 pub(crate) struct Scratch {
     stack: Vec<Waiting>,
+    x: [[(Cut, Cut); 2]; MAX_LEVELS],
+    y: [[(Cut, Cut); 2]; MAX_LEVELS],
 }
 
 impl Scratch {
     pub(crate) fn new() -> Self {
         Scratch {
-            stack: vec![(0, 0, 0, Interval::EMPTY, [Cut::NONE; 4]); STACK],
+            stack: vec![(0, 0, 0, Interval::EMPTY); STACK],
+            x: [[(Cut::NONE, Cut::NONE); 2]; MAX_LEVELS],
+            y: [[(Cut::NONE, Cut::NONE); 2]; MAX_LEVELS],
         }
     }
 }
@@ -614,7 +622,7 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
             let (dlo, dhi) = depth_span(vr, civ);
             (!civ.is_empty() && dhi >= zmin && dlo <= zmax).then_some(civ)
         };
-        // Cells waiting, each with its interval and its x and y cuts: `stack[..len]`.
+        // Cells waiting, each with its interval: `stack[..len]`.
         let mut len = 0;
         // The root covers every tile: tiles [0, min(2^top, tiles)) = [0, tiles).
         let top = sc.levels - 1;
@@ -622,12 +630,14 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         let root = [lo(0, 0), hi(0, root_hi), lo(1, 0), hi(1, root_hi)];
         let w = sc.widths[top as usize] as usize;
         if let Some(civ) = enter(root, sc.ads.hiz[top as usize][slot * w * w]) {
-            self.scratch.stack[0] = (top, 0, 0, civ, root);
+            self.scratch.x[top as usize][0] = (root[0], root[1]);
+            self.scratch.y[top as usize][0] = (root[2], root[3]);
+            self.scratch.stack[0] = (top, 0, 0, civ);
             len = 1;
         }
         while len > 0 {
             len -= 1;
-            let (level, i, j, civ, [xl, xh, yl, yh]) = self.scratch.stack[len];
+            let (level, i, j, civ) = self.scratch.stack[len];
             if civ.t0 > self.best.t {
                 continue;
             }
@@ -642,6 +652,10 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
             let mx = ((2 * i + 1) << c).min(tiles);
             let my = ((2 * j + 1) << c).min(tiles);
             let [xlm, xhm, ylm, yhm] = Cut::sides(vr, slope[mx as usize], slope[my as usize]);
+            let (xl, xh) = self.scratch.x[level as usize][(i & 1) as usize];
+            let (yl, yh) = self.scratch.y[level as usize][(j & 1) as usize];
+            self.scratch.x[c as usize] = [(xl, xhm), (xlm, xh)];
+            self.scratch.y[c as usize] = [(yl, yhm), (ylm, yh)];
             // Lane k: child (di, dj) = (k & 1, k >> 1); its cuts in block_frustum's order.
             let cuts = [
                 [xl, xhm, yl, yhm],
@@ -691,7 +705,7 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
                     t0: t0[k],
                     t1: t1[k],
                 };
-                self.scratch.stack[len] = (c, 2 * i + di, 2 * j + dj, civ, cuts[k]);
+                self.scratch.stack[len] = (c, 2 * i + di, 2 * j + dj, civ);
                 len += usize::from(pass[k]);
             }
         }
