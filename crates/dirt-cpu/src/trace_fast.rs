@@ -29,9 +29,13 @@
 //!   cells that pass wait on the stack; the test against the best hit stays
 //!   where the plain stage makes it, when a cell is popped. The same cells
 //!   are visited in the same order.
-//! - The linear walk keeps a tile's pair of minor-axis cuts for the next
-//!   band, whose first tile is usually the last tile of this one; both ends
-//!   of a band are projected as four lanes ([`tile_xy2`]).
+//! - The linear walk prepares its bands [`BAND_LANES`] at a time: their
+//!   cuts, intervals and the minor tile coordinates of their ends, as lanes
+//!   (none of it depends on the best hit), then walks them one by one as the
+//!   plain stage does, the termination test first. This breaks the chain of
+//!   divisions from one band to the next. A tile's pair of minor-axis cuts
+//!   is kept for the next band, whose first tile is usually the last tile of
+//!   this one.
 //! - Batches of [`ORDER_MIN_RAYS`] rays or more are traced in a coherent
 //!   order ([`coherent_order`]: direction face, then Morton code of the
 //!   origin); the results go back to input order.
@@ -315,6 +319,9 @@ fn depth_span(vr: &ViewRay, iv: Interval) -> (f32, f32) {
     (fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps)
 }
 
+/// Bands of the linear walk prepared together.
+const BAND_LANES: usize = 4;
+
 /// Fewest rays worth putting in a coherent order first.
 pub(crate) const ORDER_MIN_RAYS: usize = 4096;
 
@@ -527,50 +534,89 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
                 [s0 * d[2], d[axis]],
                 vr.eps,
             );
-            (
-                Cut {
-                    lo: lo[0],
-                    hi: hi[0],
-                },
-                Cut {
-                    lo: lo[1],
-                    hi: hi[1],
-                },
-            )
-        };
-        let mut kept = (u32::MAX, Cut::NONE, Cut::NONE);
-        for n in 0..=(k1 - k0) {
-            let k = if forward { k0 + n } else { k1 - n };
-            let mut band = iv;
-            let (lo, hi) = cuts(major, k);
-            lo.apply(&mut band);
-            hi.apply(&mut band);
-            if band.is_empty() {
-                continue;
-            }
-            if band.t0 > self.best.t {
-                return;
-            }
-            let [px, py, qx, qy] = tile_xy2(v, vr, band.t0, band.t1);
-            let (p, q) = ([px, py], [qx, qy]);
-            let Some((m0, m1)) = index_range(p[minor], q[minor], delta, v.tiles) else {
-                continue;
+            let cut = |k: usize| Cut {
+                lo: lo[k],
+                hi: hi[k],
             };
-            for e in 0..=(m1 - m0) {
-                let m = if minor_forward { m0 + e } else { m1 - e };
-                if kept.0 != m {
-                    let (lo, hi) = cuts(minor, m);
-                    kept = (m, lo, hi);
-                }
-                let mut span = band;
-                kept.1.apply(&mut span);
-                kept.2.apply(&mut span);
-                if span.is_empty() {
+            (cut(0), cut(1))
+        };
+        // Bands are prepared four at a time: their cuts, intervals and the
+        // minor tile coordinates of their ends as lanes, none of which
+        // depends on the best hit; then each is walked as the plain stage
+        // walks it, termination test first.
+        let (near, tan, step) = (v.near * 0.5, v.tan, v.step);
+        let bands = k1 - k0 + 1;
+        let mut kept = (u32::MAX, Cut::NONE, Cut::NONE);
+        let mut n = 0;
+        while n < bands {
+            let count = (bands - n).min(BAND_LANES as u32);
+            // Lanes past the last band repeat it; they are not walked.
+            let ks: [u32; BAND_LANES] = from_fn(|q| {
+                let n = n + (q as u32).min(count - 1);
+                if forward { k0 + n } else { k1 - n }
+            });
+            let s0: [f32; BAND_LANES] = from_fn(|q| slope[ks[q] as usize]);
+            let s1: [f32; BAND_LANES] = from_fn(|q| slope[ks[q] as usize + 1]);
+            let (l_lo, l_hi) = cut_lanes(
+                [o[major]; BAND_LANES],
+                s0.map(|s| s * o[2]),
+                [d[major]; BAND_LANES],
+                s0.map(|s| s * d[2]),
+                vr.eps,
+            );
+            let (h_lo, h_hi) = cut_lanes(
+                s1.map(|s| s * o[2]),
+                [o[major]; BAND_LANES],
+                s1.map(|s| s * d[2]),
+                [d[major]; BAND_LANES],
+                vr.eps,
+            );
+            let mut t0 = [iv.t0; BAND_LANES];
+            let mut t1 = [iv.t1; BAND_LANES];
+            for (lo, hi) in [(l_lo, l_hi), (h_lo, h_hi)] {
+                t0 = from_fn(|q| if lo[q] > t0[q] { lo[q] } else { t0[q] });
+                t1 = from_fn(|q| if hi[q] < t1[q] { hi[q] } else { t1[q] });
+            }
+            // The minor coordinate of `tile_xy` at both ends of each band.
+            let minor_at = |t: [f32; BAND_LANES]| -> [f32; BAND_LANES] {
+                from_fn(|q| {
+                    let z = fmax(o[2] + t[q] * d[2], near);
+                    ((o[minor] + t[q] * d[minor]) / z + tan) / step
+                })
+            };
+            let (pm, qm) = (minor_at(t0), minor_at(t1));
+            for q in 0..count as usize {
+                let k = ks[q];
+                let band = Interval {
+                    t0: t0[q],
+                    t1: t1[q],
+                };
+                if band.is_empty() {
                     continue;
                 }
-                let (i, j) = if major == 0 { (k, m) } else { (m, k) };
-                self.visit_tile(v, vr, i, j, span);
+                if band.t0 > self.best.t {
+                    return;
+                }
+                let Some((m0, m1)) = index_range(pm[q], qm[q], delta, v.tiles) else {
+                    continue;
+                };
+                for e in 0..=(m1 - m0) {
+                    let m = if minor_forward { m0 + e } else { m1 - e };
+                    if kept.0 != m {
+                        let (lo, hi) = cuts(minor, m);
+                        kept = (m, lo, hi);
+                    }
+                    let mut span = band;
+                    kept.1.apply(&mut span);
+                    kept.2.apply(&mut span);
+                    if span.is_empty() {
+                        continue;
+                    }
+                    let (i, j) = if major == 0 { (k, m) } else { (m, k) };
+                    self.visit_tile(v, vr, i, j, span);
+                }
             }
+            n += count;
         }
     }
 
@@ -715,14 +761,20 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         if STATS {
             self.stats.tiles += 1;
         }
-        let sc = self.sc;
         let tile = v.slot as usize * v.tile_count() + (j * v.tiles + i) as usize;
-        let [zmin, zmax] = sc.ads.hiz[0][tile];
+        let [zmin, zmax] = self.sc.ads.hiz[0][tile];
         let (zmin, zmax) = (ordered_to_f32(zmin), ordered_to_f32(zmax));
         let (lo, hi) = depth_span(vr, iv);
         if !(hi >= zmin && lo <= zmax) {
             return;
         }
+        self.buckets(vr, tile, zmin, zmax, lo, hi);
+    }
+
+    /// The rest of `visit_tile` for a tile whose depth bounds the ray's span
+    /// `[lo, hi]` meets: its buckets in the ray's depth order.
+    fn buckets(&mut self, vr: &ViewRay, tile: usize, zmin: f32, zmax: f32, lo: f32, hi: f32) {
+        let sc = self.sc;
         let nb = sc.buckets;
         let b0 = bucket_of(lo, zmin, zmax, nb);
         let b1 = bucket_of(hi, zmin, zmax, nb);
