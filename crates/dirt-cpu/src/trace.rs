@@ -69,12 +69,15 @@ pub fn trace_into(
     // and triangles in cache); the results land in input order.
     if let Some(order) = trace_fast::coherent_order(rays) {
         let index = |o: &u64| (o & 0xffff_ffff) as usize;
+        // Gathered first: a loop of loads only overlaps the cache misses of
+        // reading rays out of order, which the walk would wait on one by one.
+        let sorted: Vec<Ray> = order.par_iter().map(|o| rays[index(o)]).collect();
         match stats {
             Some(stats) => {
-                let out: Vec<(Hit, RayStats)> = order
+                let out: Vec<(Hit, RayStats)> = sorted
                     .par_iter()
-                    .map_init(Scratch::new, |scratch, o| {
-                        trace_fast::trace_ray::<true>(&sc, scratch, &rays[index(o)], traversal)
+                    .map_init(Scratch::new, |scratch, r| {
+                        trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
                     })
                     .collect();
                 for (o, (h, s)) in order.iter().zip(out) {
@@ -83,10 +86,10 @@ pub fn trace_into(
                 }
             }
             None => {
-                let out: Vec<Hit> = order
+                let out: Vec<Hit> = sorted
                     .par_iter()
-                    .map_init(Scratch::new, |scratch, o| {
-                        trace_fast::trace_ray::<false>(&sc, scratch, &rays[index(o)], traversal).0
+                    .map_init(Scratch::new, |scratch, r| {
+                        trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
                     })
                     .collect();
                 for (o, h) in order.iter().zip(out) {
