@@ -166,6 +166,12 @@ pub struct Polygon {
 }
 
 impl Polygon {
+    /// No vertices.
+    pub const EMPTY: Polygon = Polygon {
+        len: 0,
+        v: [[0.0; 3]; MAX_POLY],
+    };
+
     pub fn triangle(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Polygon {
         let mut v = [[0.0; 3]; MAX_POLY];
         v[0] = a;
@@ -180,33 +186,75 @@ impl Polygon {
 
     /// Sutherland–Hodgman against one half-space. Points on the boundary are kept.
     pub fn clip(&mut self, h: &HalfSpace, eps: f32) {
-        let n = self.len;
-        if n == 0 {
+        if self.len == 0 {
             return;
         }
-        let mut out = [[0.0f32; 3]; MAX_POLY];
-        let mut m = 0;
-        for k in 0..n {
-            let p = self.v[k];
-            let q = self.v[(k + 1) % n];
-            let fp = h.eval(p, eps);
-            let fq = h.eval(q, eps);
-            if fp >= 0.0 && m < MAX_POLY {
-                out[m] = p;
-                m += 1;
+        let mut out = Polygon::EMPTY;
+        if self.clip_into(h, eps, &mut out) {
+            *self = out;
+        }
+    }
+
+    /// [`Polygon::clip`] writing the result to `out` (only its first `len`
+    /// vertices): returns false, leaving `out` untouched, when every vertex is
+    /// inside, so the result is `self` itself. Each vertex is evaluated once;
+    /// when every vertex is outside the result is empty without the loop. Both
+    /// shortcuts give exactly what the general loop would.
+    pub fn clip_into(&self, h: &HalfSpace, eps: f32, out: &mut Polygon) -> bool {
+        let n = self.len;
+        let mut f = [0.0f32; MAX_POLY];
+        // `HalfSpace::eval` per vertex, with the match taken once.
+        let vs = &self.v[..n];
+        match *h {
+            HalfSpace::Lo { axis, s } => {
+                for (fk, p) in f.iter_mut().zip(vs) {
+                    *fk = p[axis] - s * p[2] + eps;
+                }
             }
-            if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
-                let w = fp / (fp - fq);
-                out[m] = [
-                    p[0] + (q[0] - p[0]) * w,
-                    p[1] + (q[1] - p[1]) * w,
-                    p[2] + (q[2] - p[2]) * w,
-                ];
-                m += 1;
+            HalfSpace::Hi { axis, s } => {
+                for (fk, p) in f.iter_mut().zip(vs) {
+                    *fk = s * p[2] - p[axis] + eps;
+                }
+            }
+            HalfSpace::Near(near) => {
+                for (fk, p) in f.iter_mut().zip(vs) {
+                    *fk = p[2] - near + eps;
+                }
+            }
+            HalfSpace::Far(far) => {
+                for (fk, p) in f.iter_mut().zip(vs) {
+                    *fk = far - p[2] + eps;
+                }
             }
         }
-        self.v = out;
-        self.len = m;
+        let inside = f[..n].iter().filter(|&&fk| fk >= 0.0).count();
+        if inside == n {
+            return false;
+        }
+        let mut m = 0;
+        if inside > 0 {
+            for k in 0..n {
+                let next = if k + 1 == n { 0 } else { k + 1 };
+                let p = self.v[k];
+                let q = self.v[next];
+                let (fp, fq) = (f[k], f[next]);
+                if fp >= 0.0 && m < MAX_POLY {
+                    out.v[m] = p;
+                    m += 1;
+                }
+                if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
+                    let w = fp / (fp - fq);
+                    out.v[m] = [
+                        p[0] + (q[0] - p[0]) * w,
+                        p[1] + (q[1] - p[1]) * w,
+                        p[2] + (q[2] - p[2]) * w,
+                    ];
+                    m += 1;
+                }
+            }
+        }
+        out.len = m;
+        true
     }
 
     /// Depth range of the vertices, or `None` when empty.
@@ -292,6 +340,11 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
 /// Calls `f(i, j, zlo, zhi)` for every tile of `v` whose dilated frustum the
 /// triangle (in view space) touches, with its conservative depth extent there.
 /// This is the coverage rule shared by `fill_depth` and `fill_primitives`.
+///
+/// The extent of tile `(i, j)` is [`tile_depth_extent`]'s, bit for bit: that
+/// function clips against the tile's x planes, then its y planes, so the
+/// polygon clipped to column `i`'s x planes is computed once per column and
+/// only the y planes are applied per tile. Tiles are visited column by column.
 pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32, u32, f32, f32)) {
     let Some(poly) = clip_triangle_to_view(v, tri) else {
         return;
@@ -299,10 +352,30 @@ pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32
     let Some((i0, i1, j0, j1)) = polygon_tile_range(v, &poly) else {
         return;
     };
-    for j in j0..=j1 {
-        for i in i0..=i1 {
-            if let Some((lo, hi)) = tile_depth_extent(v, &poly, i, j) {
-                f(i, j, lo, hi);
+    // Scratch polygons for the per-tile clips: written only as far as used.
+    let (mut a, mut b) = (Polygon::EMPTY, Polygon::EMPTY);
+    for i in i0..=i1 {
+        let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
+        let mut column = poly;
+        column.clip(&lo_x, v.eps);
+        column.clip(&hi_x, v.eps);
+        if column.len == 0 {
+            continue;
+        }
+        for j in j0..=j1 {
+            let [_, _, lo_y, hi_y] = block_frustum(v, i, i + 1, j, j + 1);
+            let p = if column.clip_into(&lo_y, v.eps, &mut a) {
+                &a
+            } else {
+                &column
+            };
+            let p = if p.len > 0 && p.clip_into(&hi_y, v.eps, &mut b) {
+                &b
+            } else {
+                p
+            };
+            if let Some((lo, hi)) = p.depth_range() {
+                f(i, j, lo - v.eps, hi + v.eps);
             }
         }
     }
@@ -329,6 +402,40 @@ mod tests {
 
     fn v3() -> impl Strategy<Value = Vec3> {
         (-2.0f32..2.0, -2.0f32..2.0, -2.0f32..2.0).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    /// Sutherland–Hodgman written plainly (every vertex evaluated per edge,
+    /// always copied): what `Polygon::clip` must equal bit for bit.
+    fn clip_plain(poly: &Polygon, h: &HalfSpace, eps: f32) -> Polygon {
+        let n = poly.len;
+        let mut out = Polygon {
+            len: 0,
+            v: [[0.0; 3]; MAX_POLY],
+        };
+        for k in 0..n {
+            let p = poly.v[k];
+            let q = poly.v[(k + 1) % n];
+            let fp = h.eval(p, eps);
+            let fq = h.eval(q, eps);
+            if fp >= 0.0 && out.len < MAX_POLY {
+                out.v[out.len] = p;
+                out.len += 1;
+            }
+            if ((fp >= 0.0) != (fq >= 0.0)) && out.len < MAX_POLY {
+                let w = fp / (fp - fq);
+                out.v[out.len] = [
+                    p[0] + (q[0] - p[0]) * w,
+                    p[1] + (q[1] - p[1]) * w,
+                    p[2] + (q[2] - p[2]) * w,
+                ];
+                out.len += 1;
+            }
+        }
+        out
+    }
+
+    fn bits(p: &Polygon) -> Vec<[u32; 3]> {
+        p.vertices().iter().map(|q| q.map(f32::to_bits)).collect()
     }
 
     proptest! {
@@ -358,6 +465,48 @@ mod tests {
                     prop_assert!(lo <= q[2] && q[2] <= hi, "{} not in [{}, {}]", q[2], lo, hi);
                 }
             }
+        }
+
+        // The shortcuts of Polygon::clip (all inside, all outside, one
+        // evaluation per vertex) change no bit of the plain algorithm, through
+        // a whole view and tile clip.
+        #[test]
+        fn polygon_clip_equals_plain(a in v3(), b in v3(), c in v3(), face in 0usize..6, tiles in 1u32..12, i in 0u32..12, j in 0u32..12) {
+            let vs = cube(tiles);
+            let v = &vs.views[face];
+            let (i, j) = (i % tiles, j % tiles);
+            let mut fast = Polygon::triangle(v.to_view(a), v.to_view(b), v.to_view(c));
+            let mut plain = fast;
+            let planes: Vec<HalfSpace> = view_frustum(v).into_iter().chain(block_frustum(v, i, i + 1, j, j + 1)).collect();
+            for h in &planes {
+                fast.clip(h, v.eps);
+                plain = clip_plain(&plain, h, v.eps);
+                prop_assert_eq!(bits(&fast), bits(&plain));
+            }
+        }
+
+        // for_each_covered_tile (column strips) reports exactly the tiles and
+        // extents of tile_depth_extent over the tile range, bit for bit.
+        #[test]
+        fn covered_tiles_equal_tile_extents(a in v3(), b in v3(), c in v3(), face in 0usize..6, tiles in 1u32..16) {
+            let vs = cube(tiles);
+            let v = &vs.views[face];
+            let tri = [v.to_view(a), v.to_view(b), v.to_view(c)];
+            let mut got = Vec::new();
+            for_each_covered_tile(v, tri, |i, j, lo, hi| got.push((i, j, lo.to_bits(), hi.to_bits())));
+            let mut want = Vec::new();
+            if let Some(poly) = clip_triangle_to_view(v, tri) {
+                if let Some((i0, i1, j0, j1)) = polygon_tile_range(v, &poly) {
+                    for i in i0..=i1 {
+                        for j in j0..=j1 {
+                            if let Some((lo, hi)) = tile_depth_extent(v, &poly, i, j) {
+                                want.push((i, j, lo.to_bits(), hi.to_bits()));
+                            }
+                        }
+                    }
+                }
+            }
+            prop_assert_eq!(got, want);
         }
 
         // Points of a ray inside the view lie inside the clipped interval.
