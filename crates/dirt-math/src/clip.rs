@@ -495,13 +495,13 @@ mod tests {
             let mut got = Vec::new();
             for_each_covered_tile(v, tri, |i, j, lo, hi| got.push((i, j, lo.to_bits(), hi.to_bits())));
             let mut want = Vec::new();
-            if let Some(poly) = clip_triangle_to_view(v, tri) {
-                if let Some((i0, i1, j0, j1)) = polygon_tile_range(v, &poly) {
-                    for i in i0..=i1 {
-                        for j in j0..=j1 {
-                            if let Some((lo, hi)) = tile_depth_extent(v, &poly, i, j) {
-                                want.push((i, j, lo.to_bits(), hi.to_bits()));
-                            }
+            if let Some(poly) = clip_triangle_to_view(v, tri)
+                && let Some((i0, i1, j0, j1)) = polygon_tile_range(v, &poly)
+            {
+                for i in i0..=i1 {
+                    for j in j0..=j1 {
+                        if let Some((lo, hi)) = tile_depth_extent(v, &poly, i, j) {
+                            want.push((i, j, lo.to_bits(), hi.to_bits()));
                         }
                     }
                 }
