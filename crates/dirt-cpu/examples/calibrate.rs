@@ -10,8 +10,8 @@
 //! sphere (a fixed seed), 20 000 per setting; each time is the best of three
 //! (builds over a second: one).
 
-use dirt_core::{AdsParams, Traversal};
-use dirt_cpu::cost::{CostModel, Counts};
+use dirt_core::{AdsParams, Traversal, ViewsKind};
+use dirt_cpu::cost::{CostModel, Counts, rank_correlation};
 use dirt_cpu::{Ads, trace};
 use dirt_math::{Aabb, Ray, Vec3};
 use std::time::Instant;
@@ -53,17 +53,21 @@ fn best_of_3(mut f: impl FnMut()) -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut builds = Vec::new();
     let mut traces = Vec::new();
+    // (counts, build ms, trace ns per ray) of every (scene, setting, traversal).
+    let mut frames = Vec::new();
     println!(
-        "scene,resolution,buckets,tile,traversal,build_ms,ray_ns,nodes,lists,tiles,buckets_visited,tests"
+        "scene,views,resolution,buckets,tile,traversal,build_ms,ray_ns,nodes,lists,tiles,buckets_visited,tests"
     );
     for name in ["cornell", "foliage", "layers", "spheres"] {
         let scene = dirt_scene::builtin(name).ok_or("unknown built-in scene")?;
         let tris = &scene.triangles;
         let sample = rays(&scene.bounds(), 20_000, 7);
-        for resolution in [64, 128, 256] {
-            for buckets in [1, 4, 8, 16, 32] {
-                for tile in [1, 2] {
+        for views in [ViewsKind::Cube, ViewsKind::Single] {
+            for resolution in [32, 64, 128, 256] {
+                for buckets in [1, 4, 8, 16, 32] {
+                    let tile = 1;
                     let p = AdsParams {
+                        views,
                         resolution,
                         buckets,
                         tile,
@@ -88,13 +92,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         });
                         let ray_ns = secs * 1e9 / sample.len() as f64;
                         println!(
-                            "{name},{resolution},{buckets},{tile},{trav:?},{build_ms:.3},{ray_ns:.1},{},{},{:.2},{:.2},{:.2}",
+                            "{name},{views},{resolution},{buckets},{tile},{trav:?},{build_ms:.3},{ray_ns:.1},{},{},{:.2},{:.2},{:.2}",
                             c.nodes, c.lists, c.tiles_per_ray, c.buckets_per_ray, c.tests_per_ray
                         );
                         traces.push((c, ray_ns));
                         if trav == Traversal::Linear {
                             builds.push((c, build_ms));
                         }
+                        frames.push((c, build_ms, ray_ns));
                     }
                 }
             }
@@ -111,5 +116,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         traces.len(),
         builds.len()
     );
+    // How well the model ranks: Spearman's rank correlation between predicted
+    // and measured cost, per part and for whole frames of a few ray counts.
+    let rho = |pred: Vec<f64>, meas: Vec<f64>| {
+        rank_correlation(&pred, &meas).map_or("undefined".to_string(), |r| format!("{r:.3}"))
+    };
+    println!(
+        "rank correlation, predicted vs measured: trace per ray {}, build {}",
+        rho(
+            traces.iter().map(|(c, _)| m.ray_ns(c)).collect(),
+            traces.iter().map(|(_, ns)| *ns).collect()
+        ),
+        rho(
+            builds.iter().map(|(c, _)| m.build_ms(c)).collect(),
+            builds.iter().map(|(_, ms)| *ms).collect()
+        )
+    );
+    for rays in [5_000u64, 100_000, 1_000_000] {
+        println!(
+            "rank correlation, predicted vs measured frame of {rays} rays: {}",
+            rho(
+                frames.iter().map(|(c, _, _)| m.frame_ms(c, rays)).collect(),
+                frames
+                    .iter()
+                    .map(|(_, b, ns)| b + ns * rays as f64 * 1e-6)
+                    .collect()
+            )
+        );
+    }
     Ok(())
 }

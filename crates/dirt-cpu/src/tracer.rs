@@ -1,11 +1,16 @@
 //! DIRT on the CPU as a [`Tracer`]: [`DirtCpu`] owns the structure and a copy
 //! of the triangles it was built over.
 
+use crate::cost::{self, AutoChoice, CostModel};
 use crate::{Ads, CpuError, trace_into};
 use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
     Triangle, check_lengths,
 };
+use std::time::Instant;
+
+/// Rays in the sample [`DirtCpu::auto`] measures candidates with.
+pub const AUTO_SAMPLE: usize = 512;
 
 /// DIRT on the CPU: [`Ads::build`] and [`crate::trace`] behind [`Tracer`].
 #[derive(Debug)]
@@ -14,6 +19,10 @@ pub struct DirtCpu {
     pub traversal: Traversal,
     ads: Option<Ads>,
     tris: Vec<Triangle>,
+    /// With [`DirtCpu::auto`]: the rays per frame the cost model chooses for.
+    auto: Option<u64>,
+    /// The last choice and the triangle count it was made for.
+    choice: Option<(usize, AutoChoice)>,
 }
 
 impl DirtCpu {
@@ -25,7 +34,30 @@ impl DirtCpu {
             traversal,
             ads: None,
             tris: Vec::new(),
+            auto: None,
+            choice: None,
         }
+    }
+
+    /// A tracer whose parameters the cost model chooses ([`cost::auto`]) for
+    /// frames of `rays_per_frame` rays: the library's default. The choice is
+    /// made at the first build, from a sample of rays leaving the triangles
+    /// ([`cost::sample_rays`]), and kept while the triangle count stays the
+    /// same (a deforming mesh keeps its choice; another scene gets a new one).
+    /// Its time is the build's first stage, `choose`; that build then keeps
+    /// the winning candidate's structure, built while choosing, so its other
+    /// stages are absent.
+    pub fn auto(traversal: Traversal, rays_per_frame: u64) -> Self {
+        Self {
+            auto: Some(rays_per_frame),
+            ..Self::new(AdsParams::default(), traversal)
+        }
+    }
+
+    /// The cost model's last choice, with what it ranked and skipped
+    /// (only with [`DirtCpu::auto`], after a build).
+    pub fn choice(&self) -> Option<&AutoChoice> {
+        self.choice.as_ref().map(|(_, c)| c)
     }
 
     /// [`DirtCpu::new`] and a build over `tris`.
@@ -44,12 +76,31 @@ impl DirtCpu {
             traversal,
             ads: Some(ads),
             tris: tris.to_vec(),
+            auto: None,
+            choice: None,
         }
     }
 
     /// The structure of the last build.
     pub fn ads(&self) -> Option<&Ads> {
         self.ads.as_ref()
+    }
+
+    /// Keeps `ads`, built over `tris`, and reports its build.
+    fn keep(
+        &mut self,
+        ads: Ads,
+        tris: &[Triangle],
+        stages: Vec<(&'static str, std::time::Duration)>,
+    ) -> BuildReport {
+        let report = BuildReport {
+            stages,
+            memory: Some(ads.memory().total()),
+        };
+        self.tris.clear();
+        self.tris.extend_from_slice(tris);
+        self.ads = Some(ads);
+        report
     }
 }
 
@@ -60,15 +111,32 @@ impl Tracer for DirtCpu {
 
     fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
         self.ads = None;
+        let mut stages = Vec::new();
+        if let Some(rays_per_frame) = self.auto
+            && self.choice.as_ref().is_none_or(|(n, _)| *n != tris.len())
+        {
+            let start = Instant::now();
+            let sample = cost::sample_rays(tris, AUTO_SAMPLE, 1);
+            let mut choice = cost::auto(
+                tris,
+                &sample,
+                rays_per_frame,
+                self.traversal,
+                &CostModel::CALIBRATED,
+                &cost::candidates(&AdsParams::default(), true),
+            )?;
+            self.params = choice.best.params;
+            let built = choice.best_ads.take();
+            self.choice = Some((tris.len(), choice));
+            stages.push(("choose", start.elapsed()));
+            // The winner was built while choosing, over these very triangles.
+            if let Some(ads) = built {
+                return Ok(self.keep(ads, tris, stages));
+            }
+        }
         let ads = Ads::build(tris, &self.params)?;
-        let report = BuildReport {
-            stages: ads.timings.stages(),
-            memory: Some(ads.memory().total()),
-        };
-        self.tris.clear();
-        self.tris.extend_from_slice(tris);
-        self.ads = Some(ads);
-        Ok(report)
+        stages.extend(ads.timings.stages());
+        Ok(self.keep(ads, tris, stages))
     }
 
     fn trace_into(

@@ -93,3 +93,49 @@ fn random_soup_matches_brute_force() {
         }
     }
 }
+
+// The library's default, DirtCpu::auto: the cost model's parameters, chosen
+// at the first build and kept while the triangle count stays; exact like any
+// fixed setting.
+#[test]
+fn auto_chooses_once_per_triangle_count_and_stays_exact() {
+    use dirt_core::Tracer;
+    use dirt_cpu::DirtCpu;
+    use dirt_cpu::brute_force::Brute;
+    let mut rng = Rng(11);
+    let tris = soup(300, &mut rng);
+    let rs = rays(2000, &tris, &mut rng);
+    let mut t = DirtCpu::auto(Traversal::HiZ, 50_000);
+    let first = t.build(&tris).expect("build");
+    assert_eq!(first.stages.first().map(|s| s.0), Some("choose"));
+    let choice = t.choice().expect("a choice after the build");
+    let chosen = choice.best.params;
+    assert_eq!(t.params, chosen);
+    assert_eq!(choice.ranked.len() + choice.skipped, 24);
+    // The winner built while choosing is the structure kept: no second build.
+    assert_eq!(first.stages.len(), 1, "{:?}", first.stages);
+    assert!(choice.best_ads.is_none(), "handed over to the tracer");
+    let want = Brute::new(&tris).trace(&rs).expect("brute");
+    assert_eq!(t.trace(&rs).expect("trace"), want);
+    // Same count (the soup moved): no new choice, same parameters.
+    let moved: Vec<Triangle> = tris
+        .iter()
+        .map(|t| {
+            Triangle::new(
+                t.vertex(0) + Vec3::X * 0.01,
+                t.vertex(1),
+                t.vertex(2) - Vec3::Y * 0.01,
+            )
+        })
+        .collect();
+    let second = t.build(&moved).expect("build");
+    assert!(second.stages.iter().all(|s| s.0 != "choose"));
+    assert_eq!(t.params, chosen);
+    assert_eq!(
+        t.trace(&rs).expect("trace"),
+        Brute::new(&moved).trace(&rs).expect("brute")
+    );
+    // Another count: chosen again.
+    let third = t.build(&tris[..100]).expect("build");
+    assert_eq!(third.stages.first().map(|s| s.0), Some("choose"));
+}
