@@ -86,8 +86,30 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         .iter()
         .filter(|r| &r[backend] == "dirt-cpu")
         .collect();
-    // 2 scenes × 5 grid points × 2 traversals × 5 ray types.
-    assert_eq!(dirt_rows.len(), 100);
+    // 2 scenes × (5 grid points + the cost model's choice where it is not one of them)
+    // × 2 traversals × 5 ray types.
+    let scene = column(&traces, "scene");
+    let mut points: Vec<(String, String)> = dirt_rows
+        .iter()
+        .map(|r| (r[scene].to_string(), r[setting].to_string()))
+        .collect();
+    points.sort();
+    points.dedup();
+    assert!((10..=12).contains(&points.len()), "{points:?}");
+    assert_eq!(dirt_rows.len(), points.len() * 10);
+    let choices = json["choices"].as_array().expect("choices");
+    assert_eq!(choices.len(), 2);
+    for c in choices {
+        let (sc, st) = (
+            c["scene"].as_str().expect("scene"),
+            c["setting"].as_str().expect("setting"),
+        );
+        assert!(
+            points.iter().any(|(a, b)| a == sc && b == st),
+            "the choice {st} of {sc} is measured"
+        );
+        assert!(c["built"].as_u64().expect("built") >= 1);
+    }
     for r in &dirt_rows {
         assert_eq!(&r[differ], "0", "DIRT differs from brute force: {r:?}");
         assert!(r[compared].parse::<usize>().expect("compared") > 0);
@@ -134,6 +156,8 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
 
     let md = fs::read_to_string(&report).expect("report");
     assert!(md.contains("**DIRT: 0 rays differ**"), "{md}");
+    assert!(md.contains("| DIRT setting | choose ms |"), "{md}");
+    assert!(md.contains("The fixed setting cube r128 B8 S1"), "{md}");
     assert!(
         md.contains("## Leaving out what a scene does not need"),
         "{md}"

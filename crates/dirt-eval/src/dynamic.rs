@@ -1,8 +1,11 @@
 //! A fully dynamic scene: a displaced grid whose every vertex moves every
 //! frame (a travelling wave), so every structure must be rebuilt each frame.
-//! Per frame: rebuild + trace of the same camera rays, DIRT (CPU, default
-//! setting, linear traversal) and each peer, with brute force on a prefix of
-//! the rays as the truth. Every tracer is measured by [`crate::measure`].
+//! Per frame: rebuild + trace of the same camera rays, DIRT on the CPU (the
+//! library's default, [`DirtCpu::auto`]: the cost model's choice for the frame,
+//! made at the first frame's build; and the fixed cube r128 B8 S1 beside it;
+//! Hi-Z traversal) and each peer, with brute force on a prefix of the rays as
+//! the truth. Every tracer is measured by [`crate::measure`]. It runs once per
+//! ray count of [`DynamicConfig`].
 
 use dirt_core::{AdsParams, Tracer, Traversal};
 use dirt_cpu::DirtCpu;
@@ -23,7 +26,20 @@ pub struct DynamicConfig {
     pub frames: usize,
     /// Camera rays per frame.
     pub rays: usize,
+    /// A second run with this many camera rays per frame (the figure for
+    /// frames with many rays), if any.
+    pub rays_large: Option<usize>,
 }
+
+impl DynamicConfig {
+    /// The ray counts of the runs, in order.
+    pub fn ray_counts(&self) -> Vec<usize> {
+        std::iter::once(self.rays).chain(self.rays_large).collect()
+    }
+}
+
+/// The dynamic rows' backend name of DIRT at the fixed default setting.
+pub const FIXED: &str = "dirt-cpu cube r128 B8 S1";
 
 /// One frame of one backend.
 #[derive(Clone, Debug, Serialize)]
@@ -79,7 +95,7 @@ fn camera() -> Option<Camera> {
 
 /// A tracer of the dynamic scene, with the name of its rows and how its hits are judged.
 struct Entry {
-    backend: &'static str,
+    backend: String,
     tracer: Box<dyn Tracer>,
     how: Match,
     /// A peer: skipped (and noted once) when its library cannot do the work.
@@ -87,7 +103,8 @@ struct Entry {
     skipped: bool,
 }
 
-/// Runs the frames; peers that cannot start or build are noted and skipped.
+/// Runs the frames for every ray count; peers that cannot start or build
+/// are noted and skipped.
 pub fn run(
     cfg: &DynamicConfig,
     peers: &[Peer],
@@ -96,17 +113,42 @@ pub fn run(
     pb: &ProgressBar,
     notes: &mut Vec<String>,
 ) -> Result<Vec<DynamicRow>, EvalError> {
-    let mut entries = vec![Entry {
-        backend: "dirt-cpu",
-        tracer: Box::new(DirtCpu::new(AdsParams::default(), Traversal::Linear)),
-        how: Match::Bits,
-        peer: false,
-        skipped: false,
-    }];
+    let mut rows = Vec::new();
+    for rays in cfg.ray_counts() {
+        rows.extend(run_with(cfg, rays, peers, threads, seed, pb, notes)?);
+    }
+    Ok(rows)
+}
+
+fn run_with(
+    cfg: &DynamicConfig,
+    ray_count: usize,
+    peers: &[Peer],
+    threads: usize,
+    seed: u64,
+    pb: &ProgressBar,
+    notes: &mut Vec<String>,
+) -> Result<Vec<DynamicRow>, EvalError> {
+    let mut entries = vec![
+        Entry {
+            backend: "dirt-cpu".into(),
+            tracer: Box::new(DirtCpu::auto(Traversal::HiZ, ray_count as u64)),
+            how: Match::Bits,
+            peer: false,
+            skipped: false,
+        },
+        Entry {
+            backend: FIXED.into(),
+            tracer: Box::new(DirtCpu::new(AdsParams::default(), Traversal::HiZ)),
+            how: Match::Bits,
+            peer: false,
+            skipped: false,
+        },
+    ];
     for peer in peers {
         match (peer.make)(threads) {
             Ok(tracer) => entries.push(Entry {
-                backend: peer.name,
+                backend: peer.name.into(),
                 tracer,
                 how: Match::PEER,
                 peer: true,
@@ -119,7 +161,7 @@ pub fn run(
     let mut rows = Vec::new();
     for frame in 0..cfg.frames {
         let tris = wave_grid(cfg.grid, 0.35 * frame as f32);
-        let rays: Vec<Ray> = rays::generate(&tris, camera(), RayKind::Camera, cfg.rays, seed)?;
+        let rays: Vec<Ray> = rays::generate(&tris, camera(), RayKind::Camera, ray_count, seed)?;
         let n = TRUTH_RAYS.min(rays.len());
         let truth = dirt_cpu::brute_force::trace(&tris, &rays[..n]);
         for e in entries.iter_mut().filter(|e| !e.skipped) {
@@ -139,8 +181,19 @@ pub fn run(
                     source,
                 })?;
             let d = compare(&traced.hits, &truth, e.how);
+            if let Some(ms) = built.stage("choose")
+                && frame == 0
+            {
+                notes.push(format!(
+                    "dynamic scene, {} rays per frame: {} is the cost model's choice, made in frame 0's build ({} ms of its {} ms; later frames keep it)",
+                    rays.len(),
+                    e.tracer.name(),
+                    format_ms(ms),
+                    format_ms(built.build_ms)
+                ));
+            }
             rows.push(DynamicRow {
-                backend: e.backend.to_string(),
+                backend: e.backend.clone(),
                 frame,
                 triangles: tris.len(),
                 rays: rays.len(),
@@ -155,6 +208,14 @@ pub fn run(
         pb.inc(1);
     }
     Ok(rows)
+}
+
+/// Milliseconds to three significant digits.
+fn format_ms(ms: f64) -> String {
+    format!("{ms:.3}")
+        .trim_end_matches('0')
+        .trim_end_matches('.')
+        .to_string()
 }
 
 /// The name of the deforming scene in errors.

@@ -131,6 +131,7 @@ impl EvalConfig {
                 grid: 32,
                 frames: 3,
                 rays: 4000,
+                rays_large: None,
             }),
             render: Some(RenderConfig {
                 scene: "cornell".into(),
@@ -184,6 +185,7 @@ impl EvalConfig {
                 grid: 128,
                 frames: 8,
                 rays: 5_000,
+                rays_large: Some(100_000),
             }),
             render: Some(RenderConfig {
                 scene: "cornell".into(),
@@ -299,6 +301,8 @@ pub struct EvalResults {
     pub builds: Vec<BuildRow>,
     pub traces: Vec<TraceRow>,
     pub dynamic: Vec<DynamicRow>,
+    /// Per scene, the cost model's choice for a frame of all its rays (the headline's setting).
+    pub choices: Vec<ChoiceRow>,
     /// Time and memory saved by leaving out what a scene does not need.
     pub leave_out: Vec<crate::leave_out::LeaveOutRow>,
     pub renders: Vec<RenderRow>,
@@ -312,6 +316,26 @@ pub struct EvalResults {
     #[serde(skip)]
     pub render_image: Option<dirt_render::output::Image>,
 }
+
+/// The cost model's choice (`dirt_cpu::cost::auto`) for one scene: what the
+/// library's default and the command line build for a frame of these rays.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChoiceRow {
+    pub scene: String,
+    /// The chosen setting's label, e.g. `cube r32 B4 S1`.
+    pub setting: String,
+    pub rays_per_frame: usize,
+    /// Candidates built and measured, and those pruned unbuilt.
+    pub built: usize,
+    pub skipped: usize,
+    /// Wall time of choosing (candidate builds and sample traces).
+    pub choose_ms: f64,
+    /// The model's predicted frame time of the choice.
+    pub predicted_frame_ms: f64,
+}
+
+/// Rays of a scene's run the cost model measures its candidates with.
+const CHOICE_SAMPLE: usize = 1000;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct SceneInfo {
@@ -456,8 +480,9 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
             None
         }
     };
-    let per_scene = cfg.grid.len() + cfg.peers.len() + usize::from(gpu.is_some()) + 2;
-    let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames) + usize::from(cfg.render.is_some());
+    let per_scene = cfg.grid.len() + cfg.peers.len() + usize::from(gpu.is_some()) + 3;
+    let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames * d.ray_counts().len())
+        + usize::from(cfg.render.is_some());
     let pb = progress_bar(
         (cfg.scenes.len() * per_scene + dyn_steps) as u64,
         cfg.progress,
@@ -513,12 +538,22 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
             measure_cpu(&prep, &point, cfg, &mut res)?;
             pb.inc(1);
         }
-        pb.set_message(format!("{label}: leaving out against everything on"));
         let all_rays: Vec<Ray> = prep
             .rays
             .iter()
             .flat_map(|(_, r)| r.iter().copied())
             .collect();
+        pb.set_message(format!("{label}: the cost model's choice"));
+        let point = choose(&prep, &all_rays, &mut res)?;
+        if !cfg
+            .grid
+            .iter()
+            .any(|g| g.params == point.params && !g.at_camera)
+        {
+            measure_cpu(&prep, &point, cfg, &mut res)?;
+        }
+        pb.inc(1);
+        pb.set_message(format!("{label}: leaving out against everything on"));
         let input = crate::leave_out::Input {
             scene: &prep.name,
             tris: &prep.tris,
@@ -609,6 +644,42 @@ fn prepare(
         rays,
         truth,
     })
+}
+
+/// The cost model's choice for a frame of `all_rays` (measured on a stride
+/// of them), recorded in `res.choices`.
+fn choose(
+    prep: &Prepared,
+    all_rays: &[Ray],
+    res: &mut EvalResults,
+) -> Result<GridPoint, EvalError> {
+    let stride = all_rays.len().div_ceil(CHOICE_SAMPLE).max(1);
+    let sample: Vec<Ray> = all_rays.iter().step_by(stride).copied().collect();
+    let start = std::time::Instant::now();
+    let choice = dirt_cpu::cost::auto(
+        &prep.tris,
+        &sample,
+        all_rays.len() as u64,
+        Traversal::HiZ,
+        &dirt_cpu::cost::CostModel::CALIBRATED,
+        &dirt_cpu::cost::candidates(&AdsParams::default(), true),
+    )
+    .map_err(|e| prep.build_err()(e.into()))?;
+    let choose_ms = start.elapsed().as_secs_f64() * 1e3;
+    let point = GridPoint {
+        params: choice.best.params,
+        at_camera: false,
+    };
+    res.choices.push(ChoiceRow {
+        scene: prep.name.clone(),
+        setting: point.label(),
+        rays_per_frame: all_rays.len(),
+        built: choice.ranked.len(),
+        skipped: choice.skipped,
+        choose_ms,
+        predicted_frame_ms: choice.best.frame_ms,
+    });
+    Ok(point)
 }
 
 fn measure_cpu(

@@ -9,7 +9,8 @@
 //!   centred on the bounds (the default) and on the scene camera (the
 //!   papers' placement, where whole faces can be empty);
 //! * `cost model`: the candidate `dirt_cpu::cost::choose` ranks cheapest for
-//!   a frame of every ray of the run (what `--auto` builds), leaving out too.
+//!   a frame of every ray of the run, every candidate built (the default,
+//!   `cost::auto`, prunes that ranking; its pick is the headline's setting), leaving out too.
 
 use dirt_core::{AdsParams, CoreError, Tracer, Traversal};
 use dirt_cpu::cost::{CostModel, candidates, choose};

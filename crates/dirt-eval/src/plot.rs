@@ -323,20 +323,23 @@ fn sweep(res: &EvalResults, knob: &str, path: &Path) -> Result<bool, EvalError> 
 fn dynamic(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
     let root = SVGBackend::new(path, (720, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
-    let mut backends: Vec<&str> = res.dynamic.iter().map(|r| r.backend.as_str()).collect();
+    // The first ray count's frames (every count is in the report's tables).
+    let first = res.dynamic.first().map_or(0, |r| r.rays);
+    let rows: Vec<&crate::dynamic::DynamicRow> =
+        res.dynamic.iter().filter(|r| r.rays == first).collect();
+    let mut backends: Vec<&str> = rows.iter().map(|r| r.backend.as_str()).collect();
     backends.sort_unstable();
     backends.dedup();
-    let frames = res.dynamic.iter().map(|r| r.frame).max().unwrap_or(0) as f64;
-    let ymax = res.dynamic.iter().map(|r| r.frame_ms).fold(1e-3, f64::max) * 1.5;
-    let ymin = res
-        .dynamic
+    let frames = rows.iter().map(|r| r.frame).max().unwrap_or(0) as f64;
+    let ymax = rows.iter().map(|r| r.frame_ms).fold(1e-3, f64::max) * 1.5;
+    let ymin = rows
         .iter()
         .map(|r| r.frame_ms)
         .fold(ymax, f64::min)
         .max(1e-3)
         / 1.5;
-    let tris = res.dynamic.first().map_or(0, |r| r.triangles);
-    let rays = res.dynamic.first().map_or(0, |r| r.rays);
+    let tris = rows.first().map_or(0, |r| r.triangles);
+    let rays = rows.first().map_or(0, |r| r.rays);
     let mut chart = ChartBuilder::on(&root)
         .caption(
             format!("deforming grid, {tris} triangles, {rays} rays: rebuild + trace per frame"),
@@ -356,8 +359,7 @@ fn dynamic(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
         .map_err(|e| plot_err(path, e))?;
     for (i, b) in backends.iter().enumerate() {
         let c = COLORS[i % COLORS.len()];
-        let pts: Vec<(f64, f64)> = res
-            .dynamic
+        let pts: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.backend == *b)
             .map(|r| (r.frame as f64, r.frame_ms))

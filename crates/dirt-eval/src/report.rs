@@ -216,8 +216,8 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     let _ = writeln!(s, "## Headline: DIRT against the peers\n");
     let _ = writeln!(
         s,
-        "DIRT at the default setting ({DEFAULT}) on the CPU. Ratios are dirt / peer: \
-         above 1 means DIRT is slower (build, trace time) — trace ratios are of time over all ray types.\n"
+        "DIRT on the CPU at its default: the setting the cost model (`dirt_cpu::cost::auto`, what the library's `DirtCpu::auto` and the command line build) chooses for a frame of all the scene's rays of the run; `choose ms` is the time that choice took (candidate builds and sample traces, paid once per scene, not in the build column). Ratios are dirt / peer: \
+         above 1 means DIRT is slower (build, trace time) — trace ratios are of time over all ray types. The fixed setting ({DEFAULT}) follows in the next table.\n"
     );
     let peers: Vec<String> = {
         let mut p: Vec<String> = res
@@ -232,7 +232,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     };
     let _ = write!(
         s,
-        "| scene | triangles | DIRT build ms | DIRT trace Mrays/s (linear / hiz) |"
+        "| scene | triangles | DIRT setting | choose ms | DIRT build ms | DIRT trace Mrays/s (linear / hiz) |"
     );
     for p in &peers {
         let _ = write!(
@@ -241,7 +241,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         );
     }
     let _ = writeln!(s);
-    let _ = write!(s, "|---|---:|---:|---:|");
+    let _ = write!(s, "|---|---:|---|---:|---:|---:|");
     for _ in &peers {
         let _ = write!(s, "---:|---:|---:|---:|");
     }
@@ -261,16 +261,19 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
                     && t.traversal == trav
             }))
         };
-        let Some(db) = build("dirt-cpu", DEFAULT) else {
+        let choice = res.choices.iter().find(|c| c.scene == sc.name);
+        let setting = choice.map_or(DEFAULT, |c| c.setting.as_str());
+        let Some(db) = build("dirt-cpu", setting) else {
             continue;
         };
-        let (lin_ms, lin_n) = trace("dirt-cpu", DEFAULT, "linear");
-        let (hiz_ms, hiz_n) = trace("dirt-cpu", DEFAULT, "hiz");
+        let (lin_ms, lin_n) = trace("dirt-cpu", setting, "linear");
+        let (hiz_ms, hiz_n) = trace("dirt-cpu", setting, "hiz");
         let _ = write!(
             s,
-            "| {} | {} | {} | {} / {} |",
+            "| {} | {} | {setting} | {} | {} | {} / {} |",
             sc.name,
             sc.triangles,
+            opt(choice.map(|c| c.choose_ms)),
             f(db),
             f(mrays(lin_n, lin_ms)),
             f(mrays(hiz_n, hiz_ms))
@@ -290,31 +293,33 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         let _ = writeln!(s);
     }
     let _ = writeln!(s);
-    if !res.dynamic.is_empty() {
-        let tris = res.dynamic.first().map_or(0, |r| r.triangles);
-        let rays = res.dynamic.first().map_or(0, |r| r.rays);
-        let frames = res
+    fixed_default_table(&mut s, res, &peers);
+    let mut ray_counts: Vec<usize> = res.dynamic.iter().map(|r| r.rays).collect();
+    ray_counts.dedup();
+    for rays in ray_counts {
+        let rows: Vec<crate::dynamic::DynamicRow> = res
             .dynamic
             .iter()
-            .map(|r| r.frame)
-            .max()
-            .map_or(0, |f| f + 1);
+            .filter(|r| r.rays == rays)
+            .cloned()
+            .collect();
+        let tris = rows.first().map_or(0, |r| r.triangles);
+        let frames = rows.iter().map(|r| r.frame).max().map_or(0, |f| f + 1);
         let _ = writeln!(
             s,
-            "Fully dynamic scene (a deforming grid of {tris} triangles, every vertex moves every frame; {frames} frames of rebuild + trace of {rays} camera rays; medians per frame):\n"
+            "Fully dynamic scene (a deforming grid of {tris} triangles, every vertex moves every frame; {frames} frames of rebuild + trace of {rays} camera rays; medians per frame; `dirt-cpu` is the library's default, `DirtCpu::auto`, whose choice is made in frame 0's build):\n"
         );
         let _ = writeln!(
             s,
             "| backend | build ms | trace ms | frame ms | frame dirt/backend | differ / compared (all frames) |\n|---|---:|---:|---:|---:|---:|"
         );
-        let dirt = medians(&res.dynamic, "dirt-cpu");
-        let mut backends: Vec<&str> = res.dynamic.iter().map(|r| r.backend.as_str()).collect();
+        let dirt = medians(&rows, "dirt-cpu");
+        let mut backends: Vec<&str> = rows.iter().map(|r| r.backend.as_str()).collect();
         backends.sort_unstable();
         backends.dedup();
         for b in backends {
-            if let Some((bm, tm, fm)) = medians(&res.dynamic, b) {
-                let (d, c) = res
-                    .dynamic
+            if let Some((bm, tm, fm)) = medians(&rows, b) {
+                let (d, c) = rows
                     .iter()
                     .filter(|r| r.backend == b)
                     .fold((0, 0), |(d, c), r| (d + r.differ, c + r.compared));
@@ -341,7 +346,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     let dyn_bad: usize = res
         .dynamic
         .iter()
-        .filter(|r| r.backend == "dirt-cpu")
+        .filter(|r| r.backend.starts_with("dirt"))
         .map(|r| r.differ)
         .sum();
     let dirt_compared: usize = res
@@ -422,7 +427,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         let _ = writeln!(s, "## Leaving out what a scene does not need\n");
         let _ = writeln!(
             s,
-            "Against the everything-on configuration (every view the bounds reach, `Ads::build_all_views`), per scene: `leave out` builds only the views some triangle reaches (`Ads::build`), with the cube at the bounds centre and at the scene camera; `cost model` is the candidate `dirt_cpu::cost` ranks cheapest for a frame of all the run's rays (what `--auto` builds). Trace: every ray of the run, Hi-Z, median of {} runs. `differ`: compared rays whose hit differs from brute force in any bit (must be 0).\n",
+            "Against the everything-on configuration (every view the bounds reach, `Ads::build_all_views`), per scene: `leave out` builds only the views some triangle reaches (`Ads::build`), with the cube at the bounds centre and at the scene camera; `cost model` is the candidate `dirt_cpu::cost::choose` ranks cheapest for a frame of all the run's rays with every candidate built (the default's pruned choice, `cost::auto`, is the headline's setting). Trace: every ray of the run, Hi-Z, median of {} runs. `differ`: compared rays whose hit differs from brute force in any bit (must be 0).\n",
             res.repeat
         );
         let _ = writeln!(
@@ -649,6 +654,77 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
 }
 
 /// `a / p` and `b / p`, as `x / y`.
+/// The fixed setting ([`DEFAULT`]) against the peers and against the cost
+/// model's choice of the headline, so the fixed grid stays reported.
+fn fixed_default_table(s: &mut String, res: &EvalResults, peers: &[String]) {
+    let build = |scene: &str, backend: &str, setting: &str| {
+        res.builds
+            .iter()
+            .find(|b| b.scene == scene && b.backend == backend && b.setting == setting)
+            .map(|b| b.build_ms)
+    };
+    let trace = |scene: &str, backend: &str, setting: &str, trav: &str| {
+        totals(res.traces.iter().filter(|t| {
+            t.scene == scene && t.backend == backend && t.setting == setting && t.traversal == trav
+        }))
+    };
+    let _ = writeln!(
+        s,
+        "The fixed setting {DEFAULT} (the command line's `--fixed`, `DirtCpu::new(AdsParams::default(), …)`): against the peers, and against the cost model's choice above (fixed / chosen: above 1 means the choice is faster).\n"
+    );
+    let _ = write!(
+        s,
+        "| scene | build ms | trace Mrays/s (linear / hiz) | build fixed/chosen | trace fixed/chosen (linear / hiz) |"
+    );
+    for p in peers {
+        let _ = write!(s, " build dirt/{p} | trace dirt/{p} (linear / hiz) |");
+    }
+    let _ = writeln!(s);
+    let _ = write!(s, "|---|---:|---:|---:|---:|");
+    for _ in peers {
+        let _ = write!(s, "---:|---:|");
+    }
+    let _ = writeln!(s);
+    for sc in &res.scenes {
+        let Some(fb) = build(&sc.name, "dirt-cpu", DEFAULT) else {
+            continue;
+        };
+        let chosen = res
+            .choices
+            .iter()
+            .find(|c| c.scene == sc.name)
+            .map_or(DEFAULT, |c| c.setting.as_str());
+        let (lin_ms, lin_n) = trace(&sc.name, "dirt-cpu", DEFAULT, "linear");
+        let (hiz_ms, hiz_n) = trace(&sc.name, "dirt-cpu", DEFAULT, "hiz");
+        let cb = build(&sc.name, "dirt-cpu", chosen);
+        let (clin, _) = trace(&sc.name, "dirt-cpu", chosen, "linear");
+        let (chiz, _) = trace(&sc.name, "dirt-cpu", chosen, "hiz");
+        let _ = write!(
+            s,
+            "| {} | {} | {} / {} | {} | {} / {} |",
+            sc.name,
+            f(fb),
+            f(mrays(lin_n, lin_ms)),
+            f(mrays(hiz_n, hiz_ms)),
+            opt(cb.map(|cb| fb / cb)),
+            f(lin_ms / clin),
+            f(hiz_ms / chiz)
+        );
+        for p in peers {
+            let pb = build(&sc.name, p, "");
+            let (pms, _) = trace(&sc.name, p, "", "");
+            let _ = write!(
+                s,
+                " {} | {} |",
+                opt(pb.map(|pb| fb / pb)),
+                ratio(lin_ms, pms, hiz_ms)
+            );
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(s);
+}
+
 fn ratio(a: f64, p: f64, b: f64) -> String {
     if p > 0.0 {
         format!("{} / {}", f(a / p), f(b / p))

@@ -127,6 +127,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
             grid: 64,
             frames: f,
             rays: cfg.rays,
+            rays_large: None,
         });
         d.frames = f;
     }
@@ -153,7 +154,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
         + res
             .dynamic
             .iter()
-            .filter(|r| r.backend == "dirt-cpu")
+            .filter(|r| r.backend.starts_with("dirt"))
             .map(|r| r.differ)
             .sum::<usize>();
     for f in &files {
