@@ -5,7 +5,7 @@ use std::error::Error;
 
 fn cpu_example() -> Result<(), Box<dyn Error>> {
     // README BEGIN
-    use dirt_core::{AdsParams, Tracer, Traversal};
+    use dirt_core::{Tracer, Traversal};
     use dirt_cpu::{DirtCpu, brute_force::Brute};
     use dirt_math::{Ray, Vec3};
 
@@ -17,7 +17,9 @@ fn cpu_example() -> Result<(), Box<dyn Error>> {
         f32::INFINITY,
     )];
 
-    let mut dirt = DirtCpu::new(AdsParams::default(), Traversal::HiZ);
+    // The cost model chooses the parameters for frames of 100 000 rays at the first
+    // build (DirtCpu::new(AdsParams { .. }, traversal) fixes them instead).
+    let mut dirt = DirtCpu::auto(Traversal::HiZ, 100_000);
     dirt.build(&scene.triangles)?; // rebuild every frame for a moving scene
     let hits = dirt.trace(&rays)?;
     let truth = Brute::new(&scene.triangles).trace(&rays)?;

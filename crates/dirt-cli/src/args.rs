@@ -1,12 +1,13 @@
 //! Arguments shared by several commands: the scene and the structure's
-//! parameters (with `--auto`, the cost model's choice), and `X,Y,Z` points.
+//! parameters (the cost model's choice for what is not given, or with
+//! `--fixed` the fixed defaults), and `X,Y,Z` points.
 
 use anyhow::{Context, Result};
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args};
 use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_eval::rays::{self, RayKind};
-use dirt_math::Vec3;
+use dirt_math::{Ray, Vec3};
 use dirt_scene::Scene;
 
 /// The positional scene argument shared by every subcommand.
@@ -39,27 +40,33 @@ pub struct Given {
     pub tile: bool,
 }
 
-/// Build parameters of the acceleration structure; defaults are `AdsParams::default()`.
+/// Build parameters of the acceleration structure. What is not given is the
+/// cost model's choice for the scene and the rays (`dirt_cpu::cost::auto`), or
+/// with `--fixed` `AdsParams::default()` (cube, 128, B 8, S 1).
 #[derive(Debug, Args)]
 pub struct AdsArgs {
-    /// Views covering the scene.
-    #[arg(long, value_enum, default_value_t = AdsParams::default().views)]
+    /// Views covering the scene [default: the cost model's choice; with --fixed, cube].
+    #[arg(long, value_enum, default_value_t = AdsParams::default().views, hide_default_value = true)]
     pub views: ViewsKind,
-    /// Face resolution in pixels (square faces).
-    #[arg(long, value_name = "N", default_value_t = AdsParams::default().resolution)]
+    /// Face resolution in pixels (square faces) [default: the cost model's choice; with --fixed, 128].
+    #[arg(long, value_name = "N", default_value_t = AdsParams::default().resolution, hide_default_value = true)]
     pub resolution: u32,
-    /// Depth buckets per tile.
-    #[arg(long, value_name = "B", default_value_t = AdsParams::default().buckets)]
+    /// Depth buckets per tile [default: the cost model's choice; with --fixed, 8].
+    #[arg(long, value_name = "B", default_value_t = AdsParams::default().buckets, hide_default_value = true)]
     pub buckets: u32,
-    /// Tile size in pixels.
+    /// Tile size in pixels [default: 1].
     #[arg(long, value_name = "S", default_value_t = AdsParams::default().tile)]
     pub tile: u32,
     /// Centre of the views as "X,Y,Z" [default: centre of the scene bounds].
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
     pub center: Option<Vec3>,
-    /// Choose the views (cube or single, both exact without --center), resolution and B
-    /// not given on the command line with the cost model (dirt_cpu::cost), from a
-    /// sample of rays; the hits are the same.
+    /// Use the fixed defaults (cube, 128, B 8, S 1) for what is not given, instead of
+    /// the cost model's choice. Every setting gives the same hits; only time and memory differ.
+    #[arg(long, conflicts_with = "auto")]
+    pub fixed: bool,
+    /// The cost model chooses the views (cube or single, both exact without --center),
+    /// resolution and B not given, from a sample of the rays (dirt_cpu::cost::auto).
+    /// This is the default; the flag remains for scripts.
     #[arg(long)]
     pub auto: bool,
     /// Which of the options above were given on the command line.
@@ -79,14 +86,23 @@ impl AdsArgs {
         };
     }
 
-    /// The parameters for `scene`: [`AdsArgs::params`], or with `--auto` the
-    /// cost model's cheapest candidate among those that keep every given option.
-    pub fn params_for(&self, scene: &Scene, rays_per_frame: u64) -> Result<AdsParams> {
+    /// The parameters for `scene` and a frame of `rays_per_frame` rays: with
+    /// `--fixed`, or when views, resolution and B are all given,
+    /// [`AdsArgs::params`]; otherwise the cost model's cheapest candidate among
+    /// those that keep every given option, measured on `sample` (a stride of
+    /// it), or on generated mixed rays when there is none. Prints the choice.
+    pub fn params_for(
+        &self,
+        scene: &Scene,
+        rays_per_frame: u64,
+        sample: Option<&[Ray]>,
+    ) -> Result<AdsParams> {
         let base = self.params();
-        if !self.auto {
+        let g = self.given;
+        if self.fixed || (g.views && g.resolution && g.buckets) {
             return Ok(base);
         }
-        let g = self.given;
+        let start = std::time::Instant::now();
         let cands: Vec<AdsParams> = dirt_cpu::cost::candidates(&base, !g.views)
             .into_iter()
             .map(|c| AdsParams {
@@ -107,9 +123,19 @@ impl AdsArgs {
                 uniq.push(c);
             }
         }
-        let sample = rays::generate(&scene.triangles, None, RayKind::Mixed, 2000, 1)
-            .context("--auto: cannot make the ray sample")?;
-        let ranked = dirt_cpu::cost::choose(
+        let generated;
+        let sample: Vec<Ray> = match sample {
+            Some(rays) if !rays.is_empty() => {
+                let stride = rays.len().div_ceil(AUTO_SAMPLE).max(1);
+                rays.iter().step_by(stride).copied().collect()
+            }
+            _ => {
+                generated = rays::generate(&scene.triangles, None, RayKind::Mixed, AUTO_SAMPLE, 1)
+                    .context("cost model: cannot make the ray sample")?;
+                generated
+            }
+        };
+        let choice = dirt_cpu::cost::auto(
             &scene.triangles,
             &sample,
             rays_per_frame,
@@ -117,20 +143,23 @@ impl AdsArgs {
             &dirt_cpu::cost::CostModel::CALIBRATED,
             &uniq,
         )
-        .context("--auto: cannot build the candidates")?;
-        let best = ranked.first().map_or(base, |c| c.params);
+        .context("cost model: cannot build the candidates")?;
+        let best = choice.best.params;
         eprintln!(
-            "--auto: {:?} views, resolution {}, B = {}, S = {} (cheapest predicted frame of {rays_per_frame} rays among {} candidates)",
+            "ads: {} views, resolution {}, B {}, S {}: the cost model's cheapest predicted frame of {rays_per_frame} rays ({} of {} candidates built, {} pruned; choosing took {:.1} ms; --fixed for cube 128 B8 S1)",
             best.views,
             best.resolution,
             best.buckets,
             best.tile,
-            ranked.len()
+            choice.ranked.len(),
+            uniq.len(),
+            choice.skipped,
+            start.elapsed().as_secs_f64() * 1e3
         );
         Ok(best)
     }
 
-    /// The parameters as given (defaults for the rest), without `--auto`.
+    /// The parameters as given, `AdsParams::default()` for the rest (what `--fixed` builds).
     pub fn params(&self) -> AdsParams {
         AdsParams {
             views: self.views,
@@ -141,6 +170,9 @@ impl AdsArgs {
         }
     }
 }
+
+/// Rays in the sample the cost model measures its candidates with.
+const AUTO_SAMPLE: usize = 1000;
 
 /// Parses a point `X,Y,Z` (`--center`, `--eye`, `--target`).
 pub fn parse_point(s: &str) -> Result<Vec3, String> {

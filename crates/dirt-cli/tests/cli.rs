@@ -771,9 +771,19 @@ fn auto_keeps_given_options_and_the_hits() {
     let dir = TestDir::new("auto");
     let rays = dir.path("rays.npy");
     write_rays(&rays, 3000, 5);
-    let a = dir.path("default.npy");
+    let a = dir.path("fixed.npy");
     let b = dir.path("auto.npy");
-    dirt_ok(&["trace", "cornell", "--rays", s(&rays), "--out", s(&a)]);
+    let c = dir.path("default.npy");
+    let (_, err) = dirt_ok(&[
+        "trace",
+        "cornell",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&a),
+        "--fixed",
+    ]);
+    assert!(!err.contains("ads: "), "--fixed chooses nothing: {err}");
     let (_, err) = dirt_ok(&[
         "trace",
         "cornell",
@@ -786,13 +796,49 @@ fn auto_keeps_given_options_and_the_hits() {
         "4",
     ]);
     assert!(
-        err.contains("--auto: ") && err.contains(" views, resolution "),
+        err.contains("ads: ") && err.contains(" views, resolution ") && err.contains("cost model"),
         "{err}"
     );
-    assert!(err.contains("B = 4,"), "the given B is kept: {err}");
-    assert_eq!(
-        std::fs::read(&a).expect("read"),
-        std::fs::read(&b).expect("read"),
-        "every choice gives the same hits"
+    assert!(err.contains(", B 4,"), "the given B is kept: {err}");
+    // The default is the cost model's choice, for the rays of the file.
+    let (_, err) = dirt_ok(&["trace", "cornell", "--rays", s(&rays), "--out", s(&c)]);
+    assert!(
+        err.contains("ads: ") && err.contains("frame of 3000 rays"),
+        "{err}"
     );
+    // Nothing left to choose: views, resolution and B given.
+    let (_, err) = dirt_ok(&[
+        "trace",
+        "cornell",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&c),
+        "--views",
+        "cube",
+        "--resolution",
+        "64",
+        "--buckets",
+        "4",
+    ]);
+    assert!(!err.contains("ads: "), "{err}");
+    for other in [&b, &c] {
+        assert_eq!(
+            std::fs::read(&a).expect("read"),
+            std::fs::read(other).expect("read"),
+            "every choice gives the same hits"
+        );
+    }
+    // --fixed and --auto contradict each other.
+    let out = dirt(&[
+        "trace",
+        "cornell",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&c),
+        "--fixed",
+        "--auto",
+    ]);
+    assert!(!out.status.success());
 }

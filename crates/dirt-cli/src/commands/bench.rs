@@ -161,7 +161,9 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         args.seed,
     )
     .with_context(|| format!("cannot make rays for scene {}", scene.name))?;
-    let params = args.ads.params();
+    let params = args
+        .ads
+        .params_for(&scene, rays.len() as u64, Some(&rays))?;
     params
         .validate()
         .with_context(|| format!("cannot build the acceleration structure ({params:?})"))?;

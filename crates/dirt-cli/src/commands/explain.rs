@@ -109,8 +109,8 @@ pub fn explain(
     if let Some(best) = ranked.first() {
         let _ = writeln!(
             o,
-            "    every candidate gives the same hits; pass --auto to build with the cheapest \
-             (here {} views, resolution {}, B = {}), or set --views/--resolution/--buckets/--tile yourself",
+            "    every candidate gives the same hits; without --fixed the commands build the cheapest \
+             (here {} views, resolution {}, B = {}; they prune the ranking, so a close second may win), or set --views/--resolution/--buckets/--tile yourself",
             ViewsKind::name(best.params.views),
             best.params.resolution,
             best.params.buckets

@@ -40,7 +40,7 @@ pub fn info(args: &InfoArgs) -> Result<()> {
             bounds.extent()
         );
     }
-    let params = args.ads.params_for(&scene, args.rays_per_frame)?;
+    let params = args.ads.params_for(&scene, args.rays_per_frame, None)?;
     let center = params.center.map_or_else(
         || format!("{} (bounds centre)", bounds.center()),
         |c| c.to_string(),

@@ -129,7 +129,17 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             scene.name
         );
     }
-    let params = args.ads.params();
+    // A frame is the whole render: per sample and pixel a primary ray, then
+    // per bounce a shadow ray and a bounce ray (an upper bound; paths end early).
+    let rays_per_frame = u64::from(settings.width)
+        * u64::from(settings.height)
+        * u64::from(settings.spp)
+        * (1 + 2 * u64::from(settings.bounces));
+    let params = match args.backend {
+        // These build no DIRT structure: nothing to choose.
+        RenderBackend::Reference | RenderBackend::Brute => args.ads.params(),
+        _ => args.ads.params_for(&scene, rays_per_frame, None)?,
+    };
     let traversal = args.traversal;
     let tris = &scene.triangles;
     let gpu = match args.backend {

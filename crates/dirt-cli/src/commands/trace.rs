@@ -85,10 +85,13 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         },
         _ => None,
     };
-    // Brute force builds nothing, so it has no parameters (and no --auto).
+    // Brute force builds nothing, so it has no parameters (and no cost model).
     let params = match args.backend {
         Backend::Brute => None,
-        _ => Some(args.ads.params_for(&scene, 1_000_000)?),
+        _ => Some(
+            args.ads
+                .params_for(&scene, rays.len() as u64, Some(&rays))?,
+        ),
     };
     let mut tracer: Box<dyn Tracer + '_> = match (params, &gpu) {
         (None, _) => Box::new(Brute::default()),
