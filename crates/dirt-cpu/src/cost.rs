@@ -407,9 +407,9 @@ fn first_guess(tris: usize, views: ViewsKind, resolutions: &[u32]) -> u32 {
 /// A candidate is built only when an estimate of its frame can beat the best
 /// so far — the nodes of a built candidate of the same views that it
 /// dominates (nodes grow with resolution and B), `triangles × views` with the
-/// kind's view count, and the per-ray constant for every ray — and while the
-/// predicted cost of the candidates built stays under [`AUTO_BUDGET`] of the
-/// best predicted frame. The first candidate is always built. Every candidate
+/// kind's view count, and the per-ray constant for every ray — and when the
+/// predicted cost of the candidates built, plus its own estimated build, stays
+/// under [`AUTO_BUDGET`] of the best predicted frame. The first candidate is always built. Every candidate
 /// gives the same hits.
 pub fn auto(
     tris: &[Triangle],
@@ -457,7 +457,12 @@ pub fn auto(
         tried[k] = true;
         let p = &candidates[k];
         let best = ranked.first().map_or(f64::INFINITY, |c| c.frame_ms);
-        if !ranked.is_empty() && (*spent_ms > AUTO_BUDGET * best || estimate(p, ranked) >= best) {
+        // Its estimated build must fit in what is left of the budget, and its
+        // estimated frame must beat the best.
+        let frame = estimate(p, ranked);
+        if !ranked.is_empty()
+            && (*spent_ms + (frame - per_ray_floor) > AUTO_BUDGET * best || frame >= best)
+        {
             return Ok(false);
         }
         let ads = Ads::build(tris, p)?;
