@@ -97,10 +97,21 @@ impl AdsArgs {
         rays_per_frame: u64,
         sample: Option<&[Ray]>,
     ) -> Result<AdsParams> {
+        Ok(self.choose(scene, rays_per_frame, sample)?.0)
+    }
+
+    /// [`AdsArgs::params_for`], with the CPU structure of the choice when the
+    /// cost model built it while choosing (so the CPU backend need not build it again).
+    pub fn choose(
+        &self,
+        scene: &Scene,
+        rays_per_frame: u64,
+        sample: Option<&[Ray]>,
+    ) -> Result<(AdsParams, Option<dirt_cpu::Ads>)> {
         let base = self.params();
         let g = self.given;
         if self.fixed || (g.views && g.resolution && g.buckets) {
-            return Ok(base);
+            return Ok((base, None));
         }
         let start = std::time::Instant::now();
         let cands: Vec<AdsParams> = dirt_cpu::cost::candidates(&base, !g.views)
@@ -135,7 +146,7 @@ impl AdsArgs {
                 generated
             }
         };
-        let choice = dirt_cpu::cost::auto(
+        let mut choice = dirt_cpu::cost::auto(
             &scene.triangles,
             &sample,
             rays_per_frame,
@@ -156,7 +167,7 @@ impl AdsArgs {
             choice.skipped,
             start.elapsed().as_secs_f64() * 1e3
         );
-        Ok(best)
+        Ok((best, choice.best_ads.take()))
     }
 
     /// The parameters as given, `AdsParams::default()` for the rest (what `--fixed` builds).

@@ -86,27 +86,46 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         _ => None,
     };
     // Brute force builds nothing, so it has no parameters (and no cost model).
-    let params = match args.backend {
-        Backend::Brute => None,
-        _ => Some(
-            args.ads
-                .params_for(&scene, rays.len() as u64, Some(&rays))?,
-        ),
+    let (params, chosen) = match args.backend {
+        Backend::Brute => (None, None),
+        _ => {
+            let (p, ads) = args.ads.choose(&scene, rays.len() as u64, Some(&rays))?;
+            (Some(p), ads)
+        }
     };
-    let mut tracer: Box<dyn Tracer + '_> = match (params, &gpu) {
-        (None, _) => Box::new(Brute::default()),
-        (Some(p), Some(g)) => Box::new(DirtGpu::new(g, p, args.traversal)),
-        (Some(p), None) => Box::new(DirtCpu::new(p, args.traversal)),
-    };
-    let start = Instant::now();
-    let built = tracer.build(tris).with_context(|| {
-        format!(
-            "cannot build the acceleration structure of {} with {} ({params:?})",
-            scene.name,
-            tracer.name()
-        )
-    })?;
-    let build_time = start.elapsed();
+    let (mut tracer, built, build_time): (Box<dyn Tracer + '_>, BuildReport, Duration) =
+        match (params, &gpu, chosen) {
+            // The cost model built the CPU structure of its choice: keep it.
+            (Some(_), None, Some(ads)) => {
+                let built = BuildReport {
+                    stages: ads.timings.stages(),
+                    memory: Some(ads.memory().total()),
+                };
+                let time = ads.timings.total();
+                eprintln!("build: the structure the cost model built while choosing is kept");
+                (
+                    Box::new(DirtCpu::from_ads(ads, tris, args.traversal)),
+                    built,
+                    time,
+                )
+            }
+            (params, gpu, _) => {
+                let mut tracer: Box<dyn Tracer + '_> = match (params, gpu) {
+                    (None, _) => Box::new(Brute::default()),
+                    (Some(p), Some(g)) => Box::new(DirtGpu::new(g, p, args.traversal)),
+                    (Some(p), None) => Box::new(DirtCpu::new(p, args.traversal)),
+                };
+                let start = Instant::now();
+                let built = tracer.build(tris).with_context(|| {
+                    format!(
+                        "cannot build the acceleration structure of {} with {} ({params:?})",
+                        scene.name,
+                        tracer.name()
+                    )
+                })?;
+                (tracer, built, start.elapsed())
+            }
+        };
     let start = Instant::now();
     let mut hits = vec![Hit::MISS; rays.len()];
     let report = tracer
