@@ -106,7 +106,17 @@ impl DirtCpu {
 
 impl Tracer for DirtCpu {
     fn name(&self) -> String {
-        format!("dirt-cpu ({})", self.traversal)
+        match self.choice() {
+            // Say what the cost model chose, since nobody gave it.
+            Some(c) => {
+                let p = c.best.params;
+                format!(
+                    "dirt-cpu ({}; the cost model's {} r{} B{} S{})",
+                    self.traversal, p.views, p.resolution, p.buckets, p.tile
+                )
+            }
+            None => format!("dirt-cpu ({})", self.traversal),
+        }
     }
 
     fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {

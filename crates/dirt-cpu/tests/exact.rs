@@ -115,6 +115,7 @@ fn auto_chooses_once_per_triangle_count_and_stays_exact() {
     // The winner built while choosing is the structure kept: no second build.
     assert_eq!(first.stages.len(), 1, "{:?}", first.stages);
     assert!(choice.best_ads.is_none(), "handed over to the tracer");
+    assert!(t.name().contains("the cost model's "), "{}", t.name());
     let want = Brute::new(&tris).trace(&rs).expect("brute");
     assert_eq!(t.trace(&rs).expect("trace"), want);
     // Same count (the soup moved): no new choice, same parameters.
