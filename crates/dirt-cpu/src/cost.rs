@@ -218,6 +218,29 @@ pub struct Candidate {
     pub bytes: u64,
 }
 
+impl Candidate {
+    /// The counts of `ads` (built over `tris`) and of tracing `sample`
+    /// through it, with the model's predictions for `rays_per_frame` rays.
+    fn of(
+        ads: &Ads,
+        tris: &[Triangle],
+        sample: &[Ray],
+        traversal: Traversal,
+        model: &CostModel,
+        rays_per_frame: u64,
+    ) -> Candidate {
+        let counts = Counts::measure(ads, tris, sample, traversal);
+        Candidate {
+            params: ads.params,
+            counts,
+            build_ms: model.build_ms(&counts),
+            ray_ns: model.ray_ns(&counts),
+            frame_ms: model.frame_ms(&counts, rays_per_frame),
+            bytes: ads.memory().total(),
+        }
+    }
+}
+
 /// The candidates the model ranks: face resolution {32, 64, 128, 256} × B {4, 8, 16}
 /// (S = 1; a tile of S pixels is the same structure as resolution / S), with
 /// the views and centre of `base`; with `both_views` and no centre, for the
@@ -261,15 +284,14 @@ pub fn choose(
     let mut out = Vec::with_capacity(candidates.len());
     for p in candidates {
         let ads = Ads::build(tris, p)?;
-        let counts = Counts::measure(&ads, tris, sample, traversal);
-        out.push(Candidate {
-            params: *p,
-            counts,
-            build_ms: model.build_ms(&counts),
-            ray_ns: model.ray_ns(&counts),
-            frame_ms: model.frame_ms(&counts, rays_per_frame),
-            bytes: ads.memory().total(),
-        });
+        out.push(Candidate::of(
+            &ads,
+            tris,
+            sample,
+            traversal,
+            model,
+            rays_per_frame,
+        ));
     }
     out.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     Ok(out)
@@ -409,8 +431,8 @@ fn first_guess(tris: usize, views: ViewsKind, resolutions: &[u32]) -> u32 {
 /// dominates (nodes grow with resolution and B), `triangles × views` with the
 /// kind's view count, and the per-ray constant for every ray — and when the
 /// predicted cost of the candidates built, plus its own estimated build, stays
-/// under [`AUTO_BUDGET`] of the best predicted frame. The first candidate is always built. Every candidate
-/// gives the same hits.
+/// under [`AUTO_BUDGET`] of the best predicted frame. The first candidate is
+/// always built. Every candidate gives the same hits.
 pub fn auto(
     tris: &[Triangle],
     sample: &[Ray],
@@ -466,15 +488,7 @@ pub fn auto(
             return Ok(false);
         }
         let ads = Ads::build(tris, p)?;
-        let counts = Counts::measure(&ads, tris, sample, traversal);
-        let c = Candidate {
-            params: *p,
-            counts,
-            build_ms: model.build_ms(&counts),
-            ray_ns: model.ray_ns(&counts),
-            frame_ms: model.frame_ms(&counts, rays_per_frame),
-            bytes: ads.memory().total(),
-        };
+        let c = Candidate::of(&ads, tris, sample, traversal, model, rays_per_frame);
         *spent_ms += c.build_ms + c.ray_ns * sample.len() as f64 * 1e-6;
         let wins = c.frame_ms < best;
         if wins {

@@ -129,21 +129,16 @@ fn run_with(
     pb: &ProgressBar,
     notes: &mut Vec<String>,
 ) -> Result<Vec<DynamicRow>, EvalError> {
+    let dirt = |backend: &str, tracer: DirtCpu| Entry {
+        backend: backend.into(),
+        tracer: Box::new(tracer),
+        how: Match::Bits,
+        peer: false,
+        skipped: false,
+    };
     let mut entries = vec![
-        Entry {
-            backend: "dirt-cpu".into(),
-            tracer: Box::new(DirtCpu::auto(Traversal::HiZ, ray_count as u64)),
-            how: Match::Bits,
-            peer: false,
-            skipped: false,
-        },
-        Entry {
-            backend: FIXED.into(),
-            tracer: Box::new(DirtCpu::new(AdsParams::default(), Traversal::HiZ)),
-            how: Match::Bits,
-            peer: false,
-            skipped: false,
-        },
+        dirt("dirt-cpu", DirtCpu::auto(Traversal::HiZ, ray_count as u64)),
+        dirt(FIXED, DirtCpu::new(AdsParams::default(), Traversal::HiZ)),
     ];
     for peer in peers {
         match (peer.make)(threads) {
