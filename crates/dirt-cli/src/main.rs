@@ -100,7 +100,7 @@ mod tests {
     use super::*;
     use dirt_core::{AdsParams, Traversal, ViewsKind};
     use dirt_math::Vec3;
-    use trace::Backend;
+    use trace::TraceBackend as Backend;
 
     #[test]
     fn command_line_is_well_formed() {

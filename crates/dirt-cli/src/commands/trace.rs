@@ -29,8 +29,8 @@ pub struct TraceArgs {
     #[arg(long, value_name = "HITS.npy")]
     pub out: PathBuf,
     /// Which tracer runs the rays.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
-    pub backend: Backend,
+    #[arg(long, value_enum, default_value_t = TraceBackend::Cpu)]
+    pub backend: TraceBackend,
     #[command(flatten)]
     pub ads: AdsArgs,
     /// How the cpu and gpu backends walk the tiles a ray crosses.
@@ -48,6 +48,38 @@ pub enum Backend {
     Gpu,
     /// Every ray against every triangle with the same triangle test: the ground truth.
     Brute,
+}
+
+/// The tracers of `dirt trace`: DIRT's backends, brute force, and the
+/// evaluation's peers (BVHs with their own triangle tests: their hits may
+/// differ from DIRT's in the last bits, or on a shared edge), so that whole
+/// processes can be compared on the same files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TraceBackend {
+    /// DIRT on the CPU (dirt-cpu).
+    Cpu,
+    /// DIRT on the GPU (dirt-gpu, wgpu; set WGPU_BACKEND=vulkan). Without a usable
+    /// adapter it says so and runs the cpu backend, whose hits are the same bits.
+    Gpu,
+    /// Every ray against every triangle with the same triangle test: the ground truth.
+    Brute,
+    /// obvhs's CWBVH (a peer of the evaluation; its own triangle test).
+    Obvhs,
+    /// Embree 3 (a peer of the evaluation; its own triangle test; only in a `dirt`
+    /// built with the `embree` feature, as scripts/eval builds it).
+    Embree,
+}
+
+impl fmt::Display for TraceBackend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            TraceBackend::Cpu => "cpu",
+            TraceBackend::Gpu => "gpu",
+            TraceBackend::Brute => "brute",
+            TraceBackend::Obvhs => "obvhs",
+            TraceBackend::Embree => "embree",
+        })
+    }
 }
 
 impl fmt::Display for Backend {
@@ -72,8 +104,27 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         args.backend
     );
     let tris = &scene.triangles;
+    // A peer: the evaluation's tracer of that name, if this build has it.
+    let peer = match args.backend {
+        TraceBackend::Obvhs | TraceBackend::Embree => {
+            let name = args.backend.to_string();
+            let Some(p) = dirt_eval::peers::available()
+                .into_iter()
+                .find(|p| p.name == name)
+            else {
+                anyhow::bail!(
+                    "this dirt was built without the {name} peer (build with `cargo build --release -p dirt-cli --features embree`)"
+                );
+            };
+            Some(
+                (p.make)(rayon::current_num_threads())
+                    .with_context(|| format!("cannot start {name}"))?,
+            )
+        }
+        _ => None,
+    };
     let gpu = match args.backend {
-        Backend::Gpu => match Gpu::open() {
+        TraceBackend::Gpu => match Gpu::open() {
             Ok(gpu) => {
                 eprintln!("{}", gpu_line(&gpu));
                 Some(gpu)
@@ -87,7 +138,7 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     };
     // Brute force builds nothing, so it has no parameters (and no cost model).
     let (params, chosen) = match args.backend {
-        Backend::Brute => (None, None),
+        TraceBackend::Brute | TraceBackend::Obvhs | TraceBackend::Embree => (None, None),
         _ => {
             let (p, ads) = args.ads.choose(&scene, rays.len() as u64, Some(&rays))?;
             (Some(p), ads)
@@ -111,7 +162,10 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
             }
             (params, gpu, _) => {
                 let mut tracer: Box<dyn Tracer + '_> = match (params, gpu) {
-                    (None, _) => Box::new(Brute::default()),
+                    (None, _) => match peer {
+                        Some(peer) => peer,
+                        None => Box::new(Brute::default()),
+                    },
                     (Some(p), Some(g)) => Box::new(DirtGpu::new(g, p, args.traversal)),
                     (Some(p), None) => Box::new(DirtCpu::new(p, args.traversal)),
                 };
@@ -139,15 +193,19 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         );
     }
     npy::write_hits(&args.out, &hits)?;
-    print_build(&built, build_time);
+    print_build(&built, build_time, args.backend);
     print_trace(&rays, &hits, trace_time);
     eprintln!("wrote {}", args.out.display());
     Ok(())
 }
 
-fn print_build(built: &BuildReport, total: Duration) {
-    if built.stages.is_empty() {
+fn print_build(built: &BuildReport, total: Duration, backend: TraceBackend) {
+    if backend == TraceBackend::Brute {
         eprintln!("build: none (brute force)");
+        return;
+    }
+    if built.stages.is_empty() {
+        eprintln!("build: {:.3} ms", millis(total));
         return;
     }
     let stages: Vec<String> = built
