@@ -139,4 +139,7 @@ fn auto_chooses_once_per_triangle_count_and_stays_exact() {
     // Another count: chosen again.
     let third = t.build(&tris[..100]).expect("build");
     assert_eq!(third.stages.first().map(|s| s.0), Some("choose"));
+    // An empty scene builds, and every ray misses.
+    t.build(&[]).expect("an empty scene builds");
+    assert!(t.trace(&rs).expect("trace").iter().all(|h| !h.is_hit()));
 }
