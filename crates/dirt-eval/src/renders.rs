@@ -137,18 +137,15 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
 
     let mut rows = Vec::new();
     for &spp in &cfg.spp {
-        let renderer = Renderer::new(&scene, camera, settings(spp, 1)).map_err(render_err)?;
+        let run_settings = settings(spp, 1);
+        let renderer = Renderer::new(&scene, camera, run_settings).map_err(render_err)?;
         let mut images = Vec::new();
         for which in 0..2 {
             let start = Instant::now();
             let mut tracer: Box<dyn Tracer> = if which == 0 {
-                // The library's default: the cost model chooses for this render's rays
-                // (pixels × spp × (1 + 2 × bounces), an upper bound), inside the wall time.
-                let rays = u64::from(cfg.width)
-                    * u64::from(cfg.height)
-                    * u64::from(spp)
-                    * (1 + 2 * u64::from(cfg.bounces));
-                let mut dirt = DirtCpu::auto(Traversal::HiZ, rays);
+                // The library's default: the cost model chooses for this render's
+                // rays (an upper bound), inside the wall time.
+                let mut dirt = DirtCpu::auto(Traversal::HiZ, run_settings.max_rays());
                 dirt.build(&scene.triangles).map_err(render_err)?;
                 Box::new(dirt)
             } else {

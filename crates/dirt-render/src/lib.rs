@@ -143,6 +143,16 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// An upper bound of the rays a render traces: per pixel and sample a
+    /// primary ray, then per bounce a shadow ray and a bounce ray (paths that
+    /// end early trace fewer). What a tracer's parameters are chosen for.
+    pub fn max_rays(&self) -> u64 {
+        u64::from(self.width)
+            * u64::from(self.height)
+            * u64::from(self.spp)
+            * (1 + 2 * u64::from(self.bounces))
+    }
+
     /// Checks sizes and counts.
     pub fn validate(&self) -> Result<(), RenderError> {
         if self.width == 0 || self.height == 0 || self.width > MAX_SIDE || self.height > MAX_SIDE {

@@ -129,16 +129,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             scene.name
         );
     }
-    // A frame is the whole render: per sample and pixel a primary ray, then
-    // per bounce a shadow ray and a bounce ray (an upper bound; paths end early).
-    let rays_per_frame = u64::from(settings.width)
-        * u64::from(settings.height)
-        * u64::from(settings.spp)
-        * (1 + 2 * u64::from(settings.bounces));
+    // A frame is the whole render.
     let (params, mut chosen) = match args.backend {
         // These build no DIRT structure: nothing to choose.
         RenderBackend::Reference | RenderBackend::Brute => (args.ads.params(), None),
-        _ => args.ads.choose(&scene, rays_per_frame, None)?,
+        _ => args.ads.choose(&scene, settings.max_rays(), None)?,
     };
     let mut kept = None;
     let traversal = args.traversal;
