@@ -134,17 +134,10 @@ impl AdsArgs {
                 uniq.push(c);
             }
         }
-        let generated;
         let sample: Vec<Ray> = match sample {
-            Some(rays) if !rays.is_empty() => {
-                let stride = rays.len().div_ceil(AUTO_SAMPLE).max(1);
-                rays.iter().step_by(stride).copied().collect()
-            }
-            _ => {
-                generated = rays::generate(&scene.triangles, None, RayKind::Mixed, AUTO_SAMPLE, 1)
-                    .context("cost model: cannot make the ray sample")?;
-                generated
-            }
+            Some(rays) if !rays.is_empty() => dirt_cpu::cost::stride_sample(rays, AUTO_SAMPLE),
+            _ => rays::generate(&scene.triangles, None, RayKind::Mixed, AUTO_SAMPLE, 1)
+                .context("cost model: cannot make the ray sample")?,
         };
         let mut choice = dirt_cpu::cost::auto(
             &scene.triangles,

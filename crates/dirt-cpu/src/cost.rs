@@ -333,6 +333,13 @@ pub fn rank_correlation(a: &[f64], b: &[f64]) -> Option<f64> {
     (saa > 0.0 && sbb > 0.0).then(|| sab / (saa * sbb).sqrt())
 }
 
+/// At most about `n` of the caller's `rays`, evenly strided (every k-th), as
+/// the sample the model measures candidates with.
+pub fn stride_sample(rays: &[Ray], n: usize) -> Vec<Ray> {
+    let stride = rays.len().div_ceil(n.max(1)).max(1);
+    rays.iter().step_by(stride).copied().collect()
+}
+
 /// A deterministic sample of `n` rays for the model when the caller has none:
 /// origins on the triangles (a random point of a random triangle), directions
 /// uniform on the sphere, from a fixed seed. Secondary rays start on
@@ -702,6 +709,12 @@ mod tests {
             );
         }
         assert!(sample_rays(&[], 10, 1).is_empty());
+        // A stride of the caller's rays: every third of 300 for 100, all of a short list.
+        let s = stride_sample(&a, 100);
+        assert_eq!(s.len(), 100);
+        assert_eq!((s[0], s[1], s[99]), (a[0], a[3], a[297]));
+        assert_eq!(stride_sample(&a[..7], 100), a[..7].to_vec());
+        assert!(stride_sample(&[], 100).is_empty());
     }
 
     #[test]

@@ -653,8 +653,7 @@ fn choose(
     all_rays: &[Ray],
     res: &mut EvalResults,
 ) -> Result<GridPoint, EvalError> {
-    let stride = all_rays.len().div_ceil(CHOICE_SAMPLE).max(1);
-    let sample: Vec<Ray> = all_rays.iter().step_by(stride).copied().collect();
+    let sample = dirt_cpu::cost::stride_sample(all_rays, CHOICE_SAMPLE);
     let start = std::time::Instant::now();
     let choice = dirt_cpu::cost::auto(
         &prep.tris,
