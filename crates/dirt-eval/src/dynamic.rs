@@ -205,7 +205,7 @@ fn run_with(
     Ok(rows)
 }
 
-/// Milliseconds to three significant digits.
+/// Milliseconds with at most three decimals (trailing zeros dropped).
 fn format_ms(ms: f64) -> String {
     format!("{ms:.3}")
         .trim_end_matches('0')

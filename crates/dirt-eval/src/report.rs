@@ -132,6 +132,36 @@ fn opt(x: Option<f64>) -> String {
 /// The default setting's label.
 const DEFAULT: &str = "cube r128 B8 S1";
 
+/// Build ms of a backend at a setting on one scene (`""`: the peers' setting).
+fn build_ms(res: &EvalResults, scene: &str, backend: &str, setting: &str) -> Option<f64> {
+    res.builds
+        .iter()
+        .find(|b| b.scene == scene && b.backend == backend && b.setting == setting)
+        .map(|b| b.build_ms)
+}
+
+/// Total trace ms and rays (all ray types) of a backend at a setting and
+/// traversal on one scene (`""`: the peers' setting and traversal).
+fn trace_totals(
+    res: &EvalResults,
+    scene: &str,
+    backend: &str,
+    setting: &str,
+    traversal: &str,
+) -> (f64, usize) {
+    totals(res.traces.iter().filter(|t| {
+        t.scene == scene && t.backend == backend && t.setting == setting && t.traversal == traversal
+    }))
+}
+
+/// The setting the cost model chose for a scene (the headline's), or [`DEFAULT`].
+fn chosen_setting<'a>(res: &'a EvalResults, scene: &str) -> &'a str {
+    res.choices
+        .iter()
+        .find(|c| c.scene == scene)
+        .map_or(DEFAULT, |c| c.setting.as_str())
+}
+
 /// Total trace ms and rays of a backend (all ray types) for one scene.
 fn totals<'a>(rows: impl Iterator<Item = &'a TraceRow>) -> (f64, usize) {
     rows.fold((0.0, 0), |(ms, n), r| (ms + r.trace_ms, n + r.rays))
@@ -247,22 +277,12 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     }
     let _ = writeln!(s);
     for sc in &res.scenes {
-        let build = |backend: &str, setting: &str| {
-            res.builds
-                .iter()
-                .find(|b| b.scene == sc.name && b.backend == backend && b.setting == setting)
-                .map(|b| b.build_ms)
-        };
+        let build = |backend: &str, setting: &str| build_ms(res, &sc.name, backend, setting);
         let trace = |backend: &str, setting: &str, trav: &str| {
-            totals(res.traces.iter().filter(|t| {
-                t.scene == sc.name
-                    && t.backend == backend
-                    && t.setting == setting
-                    && t.traversal == trav
-            }))
+            trace_totals(res, &sc.name, backend, setting, trav)
         };
         let choice = res.choices.iter().find(|c| c.scene == sc.name);
-        let setting = choice.map_or(DEFAULT, |c| c.setting.as_str());
+        let setting = chosen_setting(res, &sc.name);
         let Some(db) = build("dirt-cpu", setting) else {
             continue;
         };
@@ -653,21 +673,9 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     s
 }
 
-/// `a / p` and `b / p`, as `x / y`.
 /// The fixed setting ([`DEFAULT`]) against the peers and against the cost
 /// model's choice of the headline, so the fixed grid stays reported.
 fn fixed_default_table(s: &mut String, res: &EvalResults, peers: &[String]) {
-    let build = |scene: &str, backend: &str, setting: &str| {
-        res.builds
-            .iter()
-            .find(|b| b.scene == scene && b.backend == backend && b.setting == setting)
-            .map(|b| b.build_ms)
-    };
-    let trace = |scene: &str, backend: &str, setting: &str, trav: &str| {
-        totals(res.traces.iter().filter(|t| {
-            t.scene == scene && t.backend == backend && t.setting == setting && t.traversal == trav
-        }))
-    };
     let _ = writeln!(
         s,
         "The fixed setting {DEFAULT} (the command line's `--fixed`, `DirtCpu::new(AdsParams::default(), …)`): against the peers, and against the cost model's choice above (fixed / chosen: above 1 means the choice is faster).\n"
@@ -686,19 +694,19 @@ fn fixed_default_table(s: &mut String, res: &EvalResults, peers: &[String]) {
     }
     let _ = writeln!(s);
     for sc in &res.scenes {
-        let Some(fb) = build(&sc.name, "dirt-cpu", DEFAULT) else {
+        let build = |backend: &str, setting: &str| build_ms(res, &sc.name, backend, setting);
+        let trace = |backend: &str, setting: &str, trav: &str| {
+            trace_totals(res, &sc.name, backend, setting, trav)
+        };
+        let Some(fb) = build("dirt-cpu", DEFAULT) else {
             continue;
         };
-        let chosen = res
-            .choices
-            .iter()
-            .find(|c| c.scene == sc.name)
-            .map_or(DEFAULT, |c| c.setting.as_str());
-        let (lin_ms, lin_n) = trace(&sc.name, "dirt-cpu", DEFAULT, "linear");
-        let (hiz_ms, hiz_n) = trace(&sc.name, "dirt-cpu", DEFAULT, "hiz");
-        let cb = build(&sc.name, "dirt-cpu", chosen);
-        let (clin, _) = trace(&sc.name, "dirt-cpu", chosen, "linear");
-        let (chiz, _) = trace(&sc.name, "dirt-cpu", chosen, "hiz");
+        let chosen = chosen_setting(res, &sc.name);
+        let (lin_ms, lin_n) = trace("dirt-cpu", DEFAULT, "linear");
+        let (hiz_ms, hiz_n) = trace("dirt-cpu", DEFAULT, "hiz");
+        let cb = build("dirt-cpu", chosen);
+        let (clin, _) = trace("dirt-cpu", chosen, "linear");
+        let (chiz, _) = trace("dirt-cpu", chosen, "hiz");
         let _ = write!(
             s,
             "| {} | {} | {} / {} | {} | {} / {} |",
@@ -711,8 +719,8 @@ fn fixed_default_table(s: &mut String, res: &EvalResults, peers: &[String]) {
             f(hiz_ms / chiz)
         );
         for p in peers {
-            let pb = build(&sc.name, p, "");
-            let (pms, _) = trace(&sc.name, p, "", "");
+            let pb = build(p, "");
+            let (pms, _) = trace(p, "", "");
             let _ = write!(
                 s,
                 " {} | {} |",
@@ -725,6 +733,7 @@ fn fixed_default_table(s: &mut String, res: &EvalResults, peers: &[String]) {
     let _ = writeln!(s);
 }
 
+/// `a / p` and `b / p`, as `x / y`.
 fn ratio(a: f64, p: f64, b: f64) -> String {
     if p > 0.0 {
         format!("{} / {}", f(a / p), f(b / p))
