@@ -3,8 +3,8 @@
 
 use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_cpu::{Ads, trace_with_stats};
-use dirt_gpu::GpuAds;
 use dirt_gpu::testing::{any_gpu, current_test_name, exact_gpu};
+use dirt_gpu::{GpuAds, TraceResources};
 use dirt_math::{Ray, Triangle, Vec3};
 use dirt_tests::{Rng, adversarial_rays};
 use proptest::prelude::*;
@@ -36,7 +36,12 @@ fn sorted_lists(l: &dirt_core::IdLists) -> Vec<Vec<u32>> {
         .collect()
 }
 
-fn compare(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> Result<(), TestCaseError> {
+fn compare(
+    tris: &[Triangle],
+    rays: &[Ray],
+    params: &AdsParams,
+    budget: u32,
+) -> Result<(), TestCaseError> {
     let Some(g) = exact_gpu(&current_test_name()) else {
         return Ok(());
     };
@@ -62,28 +67,38 @@ fn compare(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> Result<(), Te
         "list contents differ"
     );
     for trav in [Traversal::Linear, Traversal::HiZ] {
-        let traced = dirt_gpu::trace::trace_report(g, &ads, rays, trav).expect("gpu trace");
-        // The CPU finishing a ray would make the comparison trivial: keep it rare.
-        prop_assert!(
-            traced.cpu_finished * 20 <= rays.len(),
-            "{} of {} rays finished on the CPU",
-            traced.cpu_finished,
-            rays.len()
-        );
-        let (gh, gs) = (traced.hits, traced.stats);
         let (ch, cs) = trace_with_stats(&cpu, tris, rays, trav);
-        for i in 0..rays.len() {
-            prop_assert_eq!(
-                gh[i].bits(),
-                ch[i].bits(),
-                "{:?} ray {} {:?}: gpu {:?} cpu {:?}",
-                trav,
-                i,
-                rays[i],
-                gh[i],
-                ch[i]
-            );
-            prop_assert_eq!(gs[i], cs[i], "{:?} ray {} statistics", trav, i);
+        // The default budget, and small ones that stop most rays mid-walk
+        // (in every loop) and continue them over many dispatches.
+        for budget in [dirt_gpu::trace::WORK_BUDGET, budget] {
+            let mut res = TraceResources::new(g);
+            res.budget = budget;
+            res.rounds = 16;
+            let traced = res
+                .trace_host(g, &ads, rays, trav, true)
+                .expect("gpu trace");
+            let (gh, gs) = (traced.hits, traced.stats);
+            for i in 0..rays.len() {
+                prop_assert_eq!(
+                    gh[i].bits(),
+                    ch[i].bits(),
+                    "{:?} budget {} ray {} {:?}: gpu {:?} cpu {:?}",
+                    trav,
+                    budget,
+                    i,
+                    rays[i],
+                    gh[i],
+                    ch[i]
+                );
+                prop_assert_eq!(
+                    gs[i],
+                    cs[i],
+                    "{:?} budget {} ray {} statistics",
+                    trav,
+                    budget,
+                    i
+                );
+            }
         }
     }
     Ok(())
@@ -112,10 +127,10 @@ fn params_strategy() -> impl Strategy<Value = AdsParams> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
     #[test]
-    fn gpu_equals_cpu_bit_for_bit(seed in any::<u64>(), n in 1usize..80, scale in prop::sample::select(vec![1.0f32, 1e-3, 300.0]), params in params_strategy()) {
+    fn gpu_equals_cpu_bit_for_bit(seed in any::<u64>(), n in 1usize..80, scale in prop::sample::select(vec![1.0f32, 1e-3, 300.0]), params in params_strategy(), budget in prop::sample::select(vec![30u32, 60, 120])) {
         let tris = random_scene(seed, n, scale);
         let rays = adversarial_rays(&tris, 6, seed ^ 0x5eed);
-        compare(&tris, &rays, &params)?;
+        compare(&tris, &rays, &params, budget)?;
     }
 }
 
@@ -132,7 +147,7 @@ fn builtin_scenes_gpu_equals_cpu() {
                 tile: 2,
                 center: None,
             };
-            compare(&scene.triangles, &rays, &params).expect("gpu == cpu");
+            compare(&scene.triangles, &rays, &params, 100).expect("gpu == cpu");
         }
     }
 }
@@ -148,12 +163,13 @@ fn empty_scene_builds_and_misses() {
     assert!(!h[0].is_hit());
 }
 
-/// A ray whose walk needs more loop iterations than the GPU budget (here: a
-/// 2400-triangle list in every tile it crosses) is finished by the CPU
-/// reference, with the same hit and statistics; nothing is silently wrong.
+/// A ray whose walk needs more loop iterations than the GPU's budget per
+/// dispatch (here: a 2400-triangle list in every tile it crosses) is
+/// continued on the GPU over several dispatches, with the same hit and
+/// statistics as the CPU's one walk; nothing is silently wrong.
 #[test]
-fn rays_over_the_gpu_work_budget_are_finished_exactly() {
-    let Some(g) = exact_gpu("rays_over_the_gpu_work_budget_are_finished_exactly") else {
+fn rays_over_the_gpu_work_budget_are_continued_exactly() {
+    let Some(g) = exact_gpu("rays_over_the_gpu_work_budget_are_continued_exactly") else {
         return;
     };
     let mut tris = Vec::new();
@@ -179,17 +195,24 @@ fn rays_over_the_gpu_work_budget_are_finished_exactly() {
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
     let ads = GpuAds::build(g, &tris, &params).expect("gpu build");
-    let traced = dirt_gpu::trace::trace_report(g, &ads, &rays, Traversal::Linear).expect("trace");
-    let (ch, cs) = trace_with_stats(&cpu, &tris, &rays, Traversal::Linear);
-    assert!(
-        traced.cpu_finished >= 1,
-        "the test ray should exceed the budget (tests {})",
-        cs[0].tests
-    );
-    for i in 0..rays.len() {
-        assert_eq!(traced.hits[i].bits(), ch[i].bits());
-        assert_eq!(traced.stats[i], cs[i]);
+    for trav in [Traversal::Linear, Traversal::HiZ] {
+        let traced = dirt_gpu::trace::trace_report(g, &ads, &rays, trav).expect("trace");
+        let (ch, cs) = trace_with_stats(&cpu, &tris, &rays, trav);
+        assert!(
+            cs[0].tests > dirt_gpu::trace::WORK_BUDGET,
+            "the test ray should exceed the budget (tests {})",
+            cs[0].tests
+        );
+        assert!(
+            traced.rounds >= 1,
+            "{trav:?}: the ray over the budget must take a continuation round"
+        );
+        for i in 0..rays.len() {
+            assert_eq!(traced.hits[i].bits(), ch[i].bits(), "{trav:?} ray {i}");
+            assert_eq!(traced.stats[i], cs[i], "{trav:?} ray {i}");
+        }
     }
+    let (ch, _) = trace_with_stats(&cpu, &tris, &rays, Traversal::Linear);
     assert_eq!(
         ch[1].bits(),
         dirt_cpu::brute_force::trace(&tris, &rays[1..])[0].bits()

@@ -35,7 +35,7 @@ fn check(stage: &str, wgsl_name: &str, rust: RustLayout) {
 
 #[test]
 fn shared_structs_match_their_wgsl() {
-    use dirt_gpu::{BuildParams, MipParams, ScanParams, TraceParams};
+    use dirt_gpu::{BuildParams, MipParams, PoolHeader, ScanParams, TraceParams};
     use dirt_math::{Hit, Ray, RayStats, ViewGpu};
     check(
         "trace",
@@ -88,7 +88,21 @@ fn shared_structs_match_their_wgsl() {
             levels,
             traversal,
             n_slots,
+            budget,
+            capacity,
+            with_stats,
+            _pad0,
             _pad1
+        }),
+    );
+    check(
+        "trace",
+        "PoolHeader",
+        rust_layout!(PoolHeader {
+            count_in,
+            count_out,
+            parity,
+            rounds
         }),
     );
     check(

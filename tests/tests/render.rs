@@ -118,9 +118,9 @@ fn gpu_render_equals_cpu_render_hit_for_hit_and_bit_for_bit() {
     assert_eq!(a.image.bits(), b.image.bits(), "images differ");
     assert!(a.image.pixels.iter().flatten().any(|&c| c > 0.0));
     eprintln!(
-        "{} trace calls, {rays} rays; {} finished by the CPU after the GPU's work budget",
+        "{} trace calls, {rays} rays; {} continuation rounds on the GPU",
         cpu.calls.len(),
-        gpu_tracer.inner.cpu_finished
+        gpu_tracer.inner.rounds
     );
     let _ = gpu_tracer.inner.name();
 }

@@ -17,9 +17,9 @@ pub struct BuildReport {
 /// What a [`Tracer::trace_into`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraceReport {
-    /// Rays this tracer could not finish itself and handed to another
-    /// (the GPU's rays that spent their work budget, finished by the CPU).
-    pub finished_elsewhere: usize,
+    /// Extra dispatches the trace needed: the GPU continues rays that spent
+    /// their per-dispatch work budget in further rounds (0 for the CPU).
+    pub continuation_rounds: usize,
     /// Whether per-ray statistics were written.
     pub stats: bool,
 }

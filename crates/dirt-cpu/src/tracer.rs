@@ -162,7 +162,7 @@ impl Tracer for DirtCpu {
         let with_stats = stats.is_some();
         trace_into(ads, &self.tris, rays, self.traversal, hits, stats);
         Ok(TraceReport {
-            finished_elsewhere: 0,
+            continuation_rounds: 0,
             stats: with_stats,
         })
     }

@@ -167,8 +167,8 @@ pub struct TraceMeasure {
     pub trace_ms: f64,
     /// Means of the per-ray statistics (all `None` when the tracer counts none).
     pub per_ray: PerRay,
-    /// Rays the tracer handed to another in the last timed trace.
-    pub finished_elsewhere: usize,
+    /// Continuation rounds of the last timed trace (GPU; 0 for the CPU).
+    pub continuation_rounds: usize,
     /// Hits of the last timed trace.
     pub hits: Vec<Hit>,
     /// The per-ray statistics counted (empty when none were).
@@ -210,7 +210,7 @@ pub fn trace(
         rays: rays.len(),
         trace_ms,
         per_ray: PerRay::of(&stats),
-        finished_elsewhere: report.finished_elsewhere,
+        continuation_rounds: report.continuation_rounds,
         hits,
         stats,
     })
@@ -389,9 +389,9 @@ pub struct TraceRow {
     pub compared: usize,
     pub differ: usize,
     pub differ_prim: usize,
-    /// Rays the tracer handed to another (GPU: rays the CPU reference
-    /// finished, their work budget spent); empty when none.
-    pub cpu_finished: Option<usize>,
+    /// Continuation rounds of the GPU's trace (rays that spent a dispatch's
+    /// work budget continued in further dispatches); empty when none.
+    pub continuation_rounds: Option<usize>,
 }
 
 impl TraceRow {
@@ -416,7 +416,7 @@ impl TraceRow {
             compared: d.compared,
             differ: d.differ,
             differ_prim: d.differ_prim,
-            cpu_finished: (m.finished_elsewhere > 0).then_some(m.finished_elsewhere),
+            continuation_rounds: (m.continuation_rounds > 0).then_some(m.continuation_rounds),
         }
     }
 }
@@ -527,7 +527,7 @@ mod tests {
             (row.traversal.as_str(), row.differ, row.compared),
             ("hiz", 0, 20)
         );
-        assert_eq!(row.cpu_finished, None);
+        assert_eq!(row.continuation_rounds, None);
         let json = serde_json::to_value(&row).expect("serializes");
         assert_eq!(json["traversal"], "hiz");
     }

@@ -1,7 +1,36 @@
-//! The GPU context: an adapter chosen as `WGPU_BACKEND` says, its device and
-//! queue, and the compiled pipelines of every stage.
+//! The GPU context: a device and queue (the application's, or one opened
+//! here), what dirt decided about them (the exact path, the limits it works
+//! within), and the compiled pipelines of every stage.
 
 use crate::GpuError;
+
+/// How dirt uses a device. Library users set these; nothing is read from the
+/// environment except by [`GpuOptions::from_env`] (the command line and the
+/// tests use it).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Compile the shaders through wgpu's WGSL path even where the exact path
+    /// (NoContraction SPIR-V, see [`crate::spirv`]) is available: to compare
+    /// the two; no bits are promised then.
+    pub plain_wgsl: bool,
+}
+
+impl GpuOptions {
+    /// The environment variable that sets [`GpuOptions::plain_wgsl`] when `1`.
+    pub const PLAIN_WGSL_ENV: &'static str = "DIRT_GPU_WGSL";
+
+    /// Options from the environment: `DIRT_GPU_WGSL=1` sets [`GpuOptions::plain_wgsl`].
+    pub fn from_env() -> GpuOptions {
+        GpuOptions {
+            plain_wgsl: std::env::var(Self::PLAIN_WGSL_ENV).is_ok_and(|v| v == "1"),
+        }
+    }
+}
+
+/// Storage buffers the trace binds in one compute stage (rays, hits,
+/// triangles, Hi-Z, offsets, ids, statistics, continuation pool): WebGPU's
+/// default limit, which every adapter gives.
+pub const STORAGE_BUFFERS_PER_STAGE: u32 = 8;
 
 /// A device ready to run dirt's passes.
 #[derive(Debug)]
@@ -9,18 +38,58 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// The device's limits, as the device reports them.
     pub limits: wgpu::Limits,
     /// Shaders compiled with NoContraction (see [`crate::spirv`]): the CPU's bits are promised.
     pub exact: bool,
+    /// Why [`Gpu::exact`] is what it is, in words.
+    pub exactness: &'static str,
     pub(crate) pipelines: crate::Pipelines,
 }
 
+/// The one place the exact path is decided: NoContraction SPIR-V needs a
+/// Vulkan device with passthrough shaders, and the caller not asking for
+/// plain WGSL.
+pub fn exact_path(
+    backend: wgpu::Backend,
+    features: wgpu::Features,
+    options: &GpuOptions,
+) -> (bool, &'static str) {
+    if options.plain_wgsl {
+        (
+            false,
+            "plain WGSL asked for (GpuOptions::plain_wgsl / DIRT_GPU_WGSL=1): no bits promised",
+        )
+    } else if backend != wgpu::Backend::Vulkan {
+        (
+            false,
+            "not Vulkan: WGSL compiled by wgpu, floating-point contraction up to the driver",
+        )
+    } else if !features.contains(wgpu::Features::PASSTHROUGH_SHADERS) {
+        (
+            false,
+            "the device was made without Features::PASSTHROUGH_SHADERS: WGSL compiled by wgpu, contraction up to the driver",
+        )
+    } else {
+        (
+            true,
+            "NoContraction SPIR-V on Vulkan: every float operation as written",
+        )
+    }
+}
+
 impl Gpu {
-    /// [`Gpu::new`], with the error in words. A panic inside the driver stack
+    /// [`Gpu::new`] with options from the environment ([`GpuOptions::from_env`]:
+    /// the command line and the tests), the error in words. A panic inside the driver stack
     /// counts as no usable GPU, not as a crash: callers that fall back to the
     /// CPU (the command line) or skip (the tests) need only the reason.
     pub fn open() -> Result<Gpu, String> {
-        match std::panic::catch_unwind(Gpu::new) {
+        Self::open_with(&GpuOptions::from_env())
+    }
+
+    /// [`Gpu::open`] with options.
+    pub fn open_with(options: &GpuOptions) -> Result<Gpu, String> {
+        match std::panic::catch_unwind(|| Gpu::with_options(options)) {
             Ok(Ok(gpu)) => Ok(gpu),
             Ok(Err(e)) => Err(e.to_string()),
             Err(panic) => Err(panic
@@ -34,12 +103,23 @@ impl Gpu {
         }
     }
 
-    /// Finds an adapter (honouring `WGPU_BACKEND`, e.g. `vulkan`) and opens it.
+    /// A convenience: finds an adapter (wgpu's `WGPU_BACKEND`, e.g. `vulkan`,
+    /// is honoured), opens a device for dirt and calls [`Gpu::from_device`]
+    /// with the default options.
     pub fn new() -> Result<Gpu, GpuError> {
-        pollster::block_on(Self::new_async())
+        Self::with_options(&GpuOptions::default())
     }
 
-    async fn new_async() -> Result<Gpu, GpuError> {
+    /// [`Gpu::new`] with options.
+    pub fn with_options(options: &GpuOptions) -> Result<Gpu, GpuError> {
+        let (device, queue) = pollster::block_on(Self::open_device())?;
+        Self::from_device(&device, &queue, options)
+    }
+
+    /// A device as dirt would ask for one: passthrough shaders where the
+    /// adapter has them (the exact path on Vulkan), and the adapter's largest
+    /// buffers, bindings and dispatch grids; WebGPU's defaults elsewhere.
+    pub async fn open_device() -> Result<(wgpu::Device, wgpu::Queue), GpuError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = instance
@@ -52,41 +132,51 @@ impl Gpu {
             })
             .await
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
-        let info = adapter.get_info();
         let supported = adapter.limits();
-        // WebGPU's defaults (at most 8 storage buffers per stage: the trace uses 7),
-        // widened only where dirt needs it and the adapter allows: large buffers
-        // and dispatch grids.
         let limits = wgpu::Limits {
             max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
             max_buffer_size: supported.max_buffer_size,
             max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
             ..Default::default()
         };
-        // NoContraction SPIR-V needs passthrough shaders (Vulkan); elsewhere WGSL goes through wgpu.
-        let passthrough_feature = adapter.features() & wgpu::Features::PASSTHROUGH_SHADERS;
-        // DIRT_GPU_WGSL=1 forces the plain WGSL path (to compare; no bits promised then).
-        let forced_wgsl = std::env::var("DIRT_GPU_WGSL").is_ok_and(|v| v == "1");
-        let exact = !forced_wgsl
-            && !passthrough_feature.is_empty()
-            && info.backend == wgpu::Backend::Vulkan;
-        let (device, queue) = adapter
+        adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("dirt"),
-                required_features: passthrough_feature,
-                required_limits: limits.clone(),
+                required_features: adapter.features() & wgpu::Features::PASSTHROUGH_SHADERS,
+                required_limits: limits,
                 ..Default::default()
             })
             .await
-            .map_err(|e| GpuError::Device(e.to_string()))?;
-        let pipelines = crate::Pipelines::new(&device, exact)?;
+            .map_err(|e| GpuError::Device(e.to_string()))
+    }
+
+    /// dirt on the application's device and queue. Features and limits are
+    /// read from the device; the exact path is decided by [`exact_path`]; the
+    /// pipelines are compiled here, once. The device and queue are shared
+    /// (wgpu's handles are reference counted), not copied.
+    pub fn from_device(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        options: &GpuOptions,
+    ) -> Result<Gpu, GpuError> {
+        let info = device.adapter_info();
+        let limits = device.limits();
+        if limits.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS_PER_STAGE {
+            return Err(GpuError::Unsupported(format!(
+                "the trace binds {STORAGE_BUFFERS_PER_STAGE} storage buffers in one stage; this device allows {} (max_storage_buffers_per_shader_stage)",
+                limits.max_storage_buffers_per_shader_stage
+            )));
+        }
+        let (exact, exactness) = exact_path(info.backend, device.features(), options);
+        let pipelines = crate::Pipelines::new(device, exact)?;
         Ok(Gpu {
-            device,
-            queue,
+            device: device.clone(),
+            queue: queue.clone(),
             info,
             limits,
-            pipelines,
             exact,
+            exactness,
+            pipelines,
         })
     }
 

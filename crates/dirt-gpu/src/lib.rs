@@ -27,9 +27,12 @@ pub mod testing;
 pub mod trace;
 pub mod tracer;
 
-pub use context::Gpu;
-pub use params::{BuildParams, MipParams, ScanParams, TraceParams};
+pub use context::{Gpu, GpuOptions, exact_path};
+pub use params::{BuildParams, MipParams, PoolHeader, ScanParams, TraceParams};
+pub use trace::TraceResources;
 pub use tracer::DirtGpu;
+/// The wgpu this crate is built with: hand [`Gpu::from_device`] a device of this version.
+pub use wgpu;
 
 use dirt_core::{AdsParams, BuildTimings, CoreError, IdLists};
 use dirt_math::dda::{hiz_levels, hiz_width};
@@ -53,9 +56,12 @@ pub enum GpuError {
     },
     #[error(transparent)]
     Params(#[from] CoreError),
-    /// The CPU reference, which finishes rays that spent their GPU work budget.
-    #[error(transparent)]
-    Cpu(#[from] dirt_cpu::CpuError),
+    /// The device lacks something dirt needs (a limit too low).
+    #[error("this device cannot run dirt: {0}")]
+    Unsupported(String),
+    /// A buffer handed in by the caller is too small or lacks a usage.
+    #[error("{what}: {problem}")]
+    Buffer { what: &'static str, problem: String },
     #[error(
         "{what} needs {bytes} bytes in one binding; this adapter allows {limit} (max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene"
     )]
@@ -78,6 +84,8 @@ pub(crate) struct Pipelines {
     scan_add: wgpu::ComputePipeline,
     fill: wgpu::RenderPipeline,
     trace: wgpu::ComputePipeline,
+    trace_continue: wgpu::ComputePipeline,
+    schedule: wgpu::ComputePipeline,
 }
 
 /// Render target format of the raster passes. Nothing is written to it (the
@@ -125,17 +133,34 @@ pub(crate) fn compute(
     st: &spirv::Stage,
     entry: &str,
 ) -> Result<wgpu::ComputePipeline, GpuError> {
-    let p = st.prepare(device, &[entry])?;
-    Ok(
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&p.layout),
-            module: &p.modules[0],
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        }),
-    )
+    let mut p = compute_sharing(device, st, &[entry])?;
+    p.pop().ok_or(GpuError::Shader {
+        stage: "pipelines",
+        message: format!("no pipeline for `{entry}`"),
+    })
+}
+
+/// Compute pipelines of `entries` with one layout, so that one bind group serves them all.
+pub(crate) fn compute_sharing(
+    device: &wgpu::Device,
+    st: &spirv::Stage,
+    entries: &[&str],
+) -> Result<Vec<wgpu::ComputePipeline>, GpuError> {
+    let p = st.prepare(device, entries)?;
+    Ok(entries
+        .iter()
+        .enumerate()
+        .map(|(k, entry)| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&p.layout),
+                module: p.modules.get(k).unwrap_or(&p.modules[0]),
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        })
+        .collect())
 }
 
 impl Pipelines {
@@ -145,6 +170,13 @@ impl Pipelines {
         let md = spirv::compile(device, "mip_depth", passthrough)?;
         let fp = spirv::compile(device, "fill_primitives", passthrough)?;
         let tr = spirv::compile(device, "trace", passthrough)?;
+        let [trace, trace_continue]: [wgpu::ComputePipeline; 2] =
+            compute_sharing(device, &tr, &["trace", "trace_continue"])?
+                .try_into()
+                .map_err(|_| GpuError::Shader {
+                    stage: "trace",
+                    message: "expected two pipelines".into(),
+                })?;
         let p = Pipelines {
             fill_depth: raster(device, &fd, "fill_depth")?,
             mip_depth: compute(device, &md, "mip_depth")?,
@@ -152,7 +184,9 @@ impl Pipelines {
             scan_blocks: compute(device, &fp, "scan_blocks")?,
             scan_add: compute(device, &fp, "scan_add")?,
             fill: raster(device, &fp, "fill")?,
-            trace: compute(device, &tr, "trace")?,
+            trace,
+            trace_continue,
+            schedule: compute(device, &tr, "schedule")?,
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader {
@@ -180,10 +214,6 @@ pub struct GpuAds {
     /// `slots·tiles²·B + 1` offsets after the scan (views without content have none).
     pub(crate) offsets: wgpu::Buffer,
     pub(crate) ids: wgpu::Buffer,
-    /// The triangles, kept to finish rays the GPU could not (see [`trace::trace`]).
-    pub(crate) triangles: Vec<Triangle>,
-    /// The CPU reference structure, built on first need.
-    pub(crate) cpu: std::sync::OnceLock<dirt_cpu::Ads>,
 }
 
 /// Checks that one binding of `bytes` fits the adapter.
@@ -264,6 +294,11 @@ pub(crate) fn read_back(
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(src, offset, &staging, 0, size);
     gpu.queue.submit([enc.finish()]);
+    map_read(gpu, &staging)
+}
+
+/// Maps `staging` (MAP_READ) once the GPU is done and copies it out.
+pub(crate) fn map_read(gpu: &Gpu, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
     let (tx, rx) = std::sync::mpsc::channel();
     staging.map_async(wgpu::MapMode::Read, .., move |r| {
         let _ = tx.send(r);
@@ -369,8 +404,6 @@ impl GpuAds {
             hiz,
             offsets,
             ids,
-            triangles: tris.to_vec(),
-            cpu: std::sync::OnceLock::new(),
         })
     }
 

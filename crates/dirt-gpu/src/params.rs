@@ -33,9 +33,9 @@ pub struct ScanParams {
     pub _pad2: u32,
 }
 
-/// `struct TraceParams` of `trace.wgsl`. repr(C), Pod, 32 bytes.
+/// `struct TraceParams` of `trace.wgsl`. repr(C), Pod, 48 bytes.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Pod, Zeroable)]
 pub struct TraceParams {
     pub n_rays: u32,
     pub n_views: u32,
@@ -46,5 +46,27 @@ pub struct TraceParams {
     pub traversal: u32,
     /// Views with content ([`dirt_math::View::slot`]): blocks per Hi-Z level.
     pub n_slots: u32,
+    /// Loop iterations per ray and dispatch (at most [`crate::trace::WORK_BUDGET`]).
+    pub budget: u32,
+    /// Rays the continuation pool has room for.
+    pub capacity: u32,
+    /// 1: write per-ray statistics.
+    pub with_stats: u32,
+    pub _pad0: u32,
     pub _pad1: u32,
+}
+
+/// `struct PoolHeader` of `trace.wgsl`: the head of the continuation pool.
+/// repr(C), Pod, 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct PoolHeader {
+    /// Unfinished rays listed for the next continuation dispatch.
+    pub count_in: u32,
+    /// Unfinished rays listed by the dispatch running (zero between dispatches).
+    pub count_out: u32,
+    /// Which of the two to-do lists the next continuation reads.
+    pub parity: u32,
+    /// Continuation dispatches that had rays to continue.
+    pub rounds: u32,
 }

@@ -1,26 +1,53 @@
-//! Pass `trace` (`trace.wgsl`): one compute thread per ray, ray buffer in, hit
-//! buffer out, in chunks that fit one binding. Mirrors `dirt_cpu::trace`.
+//! Pass `trace` (`trace.wgsl`): closest hits of a ray buffer into a hit
+//! buffer, recorded into the caller's command encoder. Mirrors `dirt_cpu::trace`.
 //!
-//! Each ray has a budget of loop iterations (`work.wgsl`): lavapipe silently
-//! ends all loops of an invocation after 65535 iterations. A ray that spends
-//! its budget comes back marked [`UNFINISHED`] and is traced again here by the
-//! CPU reference, whose hits and statistics are the GPU's bit for bit; the
-//! number of such rays is reported.
+//! Each ray has a budget of loop iterations per dispatch ([`WORK_BUDGET`]):
+//! lavapipe silently ends all loops of an invocation after 65535 iterations,
+//! and a long dispatch stalls any GPU. A ray that spends its budget saves
+//! where its walk stands in the continuation pool and is listed as
+//! unfinished; the `schedule` pass turns the list into an indirect dispatch
+//! of `trace_continue`, which resumes each listed ray exactly where it
+//! stopped. Hits and statistics are those of one uninterrupted walk, bit for
+//! bit; no CPU takes part. [`TraceResources::encode_trace`] records the first
+//! dispatch and [`TraceResources::rounds`] continuation rounds;
+//! [`TraceResources::encode_continue`] records more, and the pool's
+//! [`PoolHeader`] says how many rays are still unfinished and how many
+//! rounds ran.
+//!
+//! Buffer layouts, byte for byte: rays are `dirt_math::Ray` (32 bytes:
+//! origin xyz, tmin, dir xyz, tmax, all f32), hits `dirt_math::Hit` (16
+//! bytes: prim u32, t, u, v f32; prim `0xffffffff` a miss, [`UNFINISHED`] a
+//! ray still being traced), statistics `dirt_math::RayStats` (16 bytes: views,
+//! tiles, buckets, tests, u32), little-endian, tightly packed.
 
 use crate::fill_primitives::grid;
-use crate::{
-    Gpu, GpuAds, GpuError, TraceParams, check_binding, read_back, storage_init, uniform_init,
-};
+use crate::{Gpu, GpuAds, GpuError, PoolHeader, TraceParams, map_read, read_back};
 use dirt_core::Traversal;
 use dirt_math::dda::hiz_levels;
 use dirt_math::{Hit, Ray, RayStats};
+use std::collections::HashMap;
+use wgpu::util::DeviceExt;
 
-/// Rays per dispatch: small enough for any binding limit and to keep each
-/// submission short.
+/// Rays per submission of the host-slice wrapper: keeps each submission short.
 const CHUNK: usize = 1 << 18;
 
-/// The primitive id the shader writes for a ray that ran out of its work budget.
+/// The primitive id of a ray that is still being traced (its budget spent,
+/// its continuation not yet run).
 pub const UNFINISHED: u32 = 0xffff_fffe;
+
+/// Loop iterations a ray may run per dispatch, at most: 7000 × 8 lanes stays
+/// under lavapipe's 65535 iterations per invocation with room for the loops' exits.
+pub const WORK_BUDGET: u32 = 7000;
+
+/// Words of a ray's saved walk in the pool (`trace.wgsl`'s `STATE_WORDS`).
+pub const STATE_WORDS: u64 = 16;
+
+/// Continuation rounds recorded after the first dispatch, by default.
+pub const ROUNDS: u32 = 4;
+
+/// Pool bytes per ray: a place in each of the two to-do lists and a saved walk.
+const POOL_BYTES_PER_RAY: u64 = (2 + STATE_WORDS) * 4;
+const HEADER_BYTES: u64 = std::mem::size_of::<PoolHeader>() as u64;
 
 /// Closest hits and per-ray statistics of `rays`. Rays that fail
 /// [`Ray::validate`] (non-finite values, a zero direction, a bad range) miss,
@@ -41,119 +68,418 @@ pub fn trace(
 pub struct Traced {
     pub hits: Vec<Hit>,
     pub stats: Vec<RayStats>,
-    /// Rays the GPU left unfinished (work budget spent) that the CPU reference traced.
-    pub cpu_finished: usize,
+    /// Continuation dispatches that had rays to continue, summed over submissions.
+    pub rounds: u32,
+    /// Submissions made (one per chunk of rays, plus one per extra batch of rounds).
+    pub submissions: u32,
 }
 
-/// [`trace`], also saying how many rays the CPU reference had to finish.
+/// [`trace`], also saying how many continuation rounds it took.
 pub fn trace_report(
     gpu: &Gpu,
     ads: &GpuAds,
     rays: &[Ray],
     traversal: Traversal,
 ) -> Result<Traced, GpuError> {
-    let mut out = Traced {
-        hits: Vec::with_capacity(rays.len()),
-        stats: Vec::with_capacity(rays.len()),
-        cpu_finished: 0,
-    };
-    for chunk in rays.chunks(CHUNK) {
-        let (h, s) = trace_chunk(gpu, ads, chunk, traversal)?;
-        out.hits.extend(h);
-        out.stats.extend(s);
-    }
-    let unfinished: Vec<usize> = (0..rays.len())
-        .filter(|&i| out.hits[i].prim == UNFINISHED)
-        .collect();
-    if !unfinished.is_empty() {
-        let cpu = match ads.cpu.get() {
-            Some(c) => c,
-            None => {
-                let built = dirt_cpu::Ads::build(&ads.triangles, &ads.params)?;
-                ads.cpu.get_or_init(|| built)
-            }
-        };
-        let again: Vec<Ray> = unfinished.iter().map(|&i| rays[i]).collect();
-        let (h, s) = dirt_cpu::trace_with_stats(cpu, &ads.triangles, &again, traversal);
-        for (k, &i) in unfinished.iter().enumerate() {
-            out.hits[i] = h[k];
-            out.stats[i] = s[k];
-        }
-        out.cpu_finished = unfinished.len();
-    }
-    Ok(out)
+    TraceResources::new(gpu).trace_host(gpu, ads, rays, traversal, true)
 }
 
-fn trace_chunk(
-    gpu: &Gpu,
-    ads: &GpuAds,
-    rays: &[Ray],
-    traversal: Traversal,
-) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
-    let n = rays.len() as u64;
-    check_binding(gpu, "rays", n * 32)?;
-    let ray_buf = storage_init(
-        gpu,
-        "rays",
-        bytemuck::cast_slice(rays),
-        wgpu::BufferUsages::empty(),
-    );
-    let hit_buf = storage_init(
-        gpu,
-        "hits",
-        &vec![0u8; (n * 16) as usize],
-        wgpu::BufferUsages::COPY_SRC,
-    );
-    let stat_buf = storage_init(
-        gpu,
-        "stats",
-        &vec![0u8; (n * 16) as usize],
-        wgpu::BufferUsages::COPY_SRC,
-    );
-    let tiles = ads.params.tiles();
-    let params = TraceParams {
-        n_rays: n as u32,
-        n_views: ads.views.views.len() as u32,
-        n_slots: ads.views.slots() as u32,
-        tiles,
-        buckets: ads.params.buckets,
-        levels: hiz_levels(tiles),
-        traversal: match traversal {
-            Traversal::Linear => 0,
-            Traversal::HiZ => 1,
-        },
-        ..Default::default()
-    };
-    let u = uniform_init(gpu, "trace params", bytemuck::bytes_of(&params));
-    let p = &gpu.pipelines.trace;
-    let bind = crate::bind_buffers(
-        gpu,
-        "trace",
-        &p.get_bind_group_layout(0),
-        &[
-            (0, &ray_buf),
-            (1, &hit_buf),
-            (2, &ads.tris),
-            (3, &ads.views_uniform),
-            (4, &u),
-            (5, &ads.hiz),
-            (6, &ads.offsets),
-            (7, &ads.ids),
-            (8, &stat_buf),
-        ],
-    );
-    let mut enc = gpu.device.create_command_encoder(&Default::default());
-    {
-        let (x, y) = grid(gpu, n.div_ceil(64));
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(p);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(x, y, 1);
+/// The trace's buffers that live from frame to frame: the continuation pool,
+/// the indirect dispatch arguments, the parameter uniforms (one per distinct
+/// set of parameters, kept) and the last bind group (for
+/// [`TraceResources::encode_continue`]). Make one per tracer and reuse it.
+#[derive(Debug)]
+pub struct TraceResources {
+    /// Loop iterations per ray and dispatch (1..=[`WORK_BUDGET`]). Lower
+    /// values make more continuation rounds (the tests force them so).
+    pub budget: u32,
+    /// Continuation rounds recorded by each encode call.
+    pub rounds: u32,
+    pool: Option<wgpu::Buffer>,
+    capacity: u32,
+    dispatch: wgpu::Buffer,
+    no_stats: wgpu::Buffer,
+    params: HashMap<TraceParams, wgpu::Buffer>,
+    bind: Option<wgpu::BindGroup>,
+    schedule_bind: Option<wgpu::BindGroup>,
+}
+
+fn check_buffer(
+    what: &'static str,
+    buf: &wgpu::Buffer,
+    bytes: u64,
+    usage: wgpu::BufferUsages,
+) -> Result<(), GpuError> {
+    if buf.size() < bytes {
+        return Err(GpuError::Buffer {
+            what,
+            problem: format!("holds {} bytes, the trace needs {bytes}", buf.size()),
+        });
     }
-    gpu.queue.submit([enc.finish()]);
-    gpu.wait()?;
-    let hits = bytemuck::pod_collect_to_vec::<u8, Hit>(&read_back(gpu, &hit_buf, 0, n * 16)?);
-    let stats =
-        bytemuck::pod_collect_to_vec::<u8, RayStats>(&read_back(gpu, &stat_buf, 0, n * 16)?);
-    Ok((hits[..n as usize].to_vec(), stats[..n as usize].to_vec()))
+    if !buf.usage().contains(usage) {
+        return Err(GpuError::Buffer {
+            what,
+            problem: format!("has usage {:?}, the trace needs {usage:?}", buf.usage()),
+        });
+    }
+    Ok(())
+}
+
+fn binding(buf: &wgpu::Buffer, bytes: u64) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer: buf,
+        offset: 0,
+        size: wgpu::BufferSize::new(bytes.max(4)),
+    })
+}
+
+impl TraceResources {
+    /// Resources for tracing on `gpu`; the pool is made at the first trace,
+    /// sized for its rays, and grows when a trace needs more.
+    pub fn new(gpu: &Gpu) -> Self {
+        let dispatch = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trace dispatch"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        let no_stats = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("no statistics"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        TraceResources {
+            budget: WORK_BUDGET,
+            rounds: ROUNDS,
+            pool: None,
+            capacity: 0,
+            dispatch,
+            no_stats,
+            params: HashMap::new(),
+            bind: None,
+            schedule_bind: None,
+        }
+    }
+
+    /// The most rays one encode call takes on `gpu`: the pool must fit one
+    /// binding, and a continuation dispatch one row of workgroups.
+    pub fn max_rays(gpu: &Gpu) -> u32 {
+        let by_binding = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .saturating_sub(HEADER_BYTES)
+            / POOL_BYTES_PER_RAY;
+        let by_grid = gpu.limits.max_compute_workgroups_per_dimension as u64 * 64;
+        by_binding.min(by_grid).min(u32::MAX as u64) as u32
+    }
+
+    /// Bytes of the continuation pool as allocated (0 before the first trace).
+    pub fn pool_bytes(&self) -> u64 {
+        self.pool.as_ref().map_or(0, |p| p.size())
+    }
+
+    /// The pool: its first 16 bytes are a [`PoolHeader`] (copy them out
+    /// after a trace to learn how many rays are unfinished). `None` before
+    /// the first trace.
+    pub fn pool(&self) -> Option<&wgpu::Buffer> {
+        self.pool.as_ref()
+    }
+
+    fn ensure_pool(&mut self, gpu: &Gpu, count: u32) -> Result<(), GpuError> {
+        let max = Self::max_rays(gpu);
+        if count > max {
+            return Err(GpuError::TooLarge {
+                what: "rays of one trace (continuation pool)",
+                bytes: HEADER_BYTES + count as u64 * POOL_BYTES_PER_RAY,
+                limit: gpu.limits.max_storage_buffer_binding_size,
+            });
+        }
+        if self.pool.is_some() && count <= self.capacity {
+            return Ok(());
+        }
+        // Headroom so that slowly growing ray counts do not remake it every frame.
+        let capacity = count
+            .max(64)
+            .checked_next_power_of_two()
+            .unwrap_or(max)
+            .min(max);
+        self.pool = Some(gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trace pool"),
+            size: HEADER_BYTES + capacity as u64 * POOL_BYTES_PER_RAY,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        }));
+        self.capacity = capacity;
+        self.schedule_bind = None;
+        Ok(())
+    }
+
+    /// Records the trace of `count` rays of `rays` against `ads` into `enc`:
+    /// the first dispatch, then [`TraceResources::rounds`] continuation
+    /// rounds. Nothing is submitted or waited for. `rays` needs `STORAGE`
+    /// usage and `32·count` bytes, `hits` and `stats` (when given) `STORAGE`
+    /// and `16·count` bytes. After the commands run, every hit is final
+    /// unless the pool's [`PoolHeader::count_in`] is not zero; then those rays
+    /// hold [`UNFINISHED`] until [`TraceResources::encode_continue`] records
+    /// more rounds.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_trace(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        ads: &GpuAds,
+        rays: &wgpu::Buffer,
+        hits: &wgpu::Buffer,
+        stats: Option<&wgpu::Buffer>,
+        count: u32,
+        traversal: Traversal,
+    ) -> Result<(), GpuError> {
+        let n = count as u64;
+        check_buffer("the ray buffer", rays, n * 32, wgpu::BufferUsages::STORAGE)?;
+        check_buffer("the hit buffer", hits, n * 16, wgpu::BufferUsages::STORAGE)?;
+        if let Some(s) = stats {
+            check_buffer(
+                "the statistics buffer",
+                s,
+                n * 16,
+                wgpu::BufferUsages::STORAGE,
+            )?;
+        }
+        if !(1..=WORK_BUDGET).contains(&self.budget) {
+            return Err(GpuError::Params(dirt_core::CoreError::InvalidParams(
+                format!(
+                    "the trace's work budget must be in 1..={WORK_BUDGET}, got {}",
+                    self.budget
+                ),
+            )));
+        }
+        self.ensure_pool(gpu, count)?;
+        let Some(pool) = self.pool.clone() else {
+            return Err(GpuError::Device("the trace pool was not made".into()));
+        };
+        enc.clear_buffer(&pool, 0, Some(HEADER_BYTES));
+        if count == 0 {
+            self.bind = None;
+            return Ok(());
+        }
+        let tiles = ads.params.tiles();
+        let params = TraceParams {
+            n_rays: count,
+            n_views: ads.views.views.len() as u32,
+            n_slots: ads.views.slots() as u32,
+            tiles,
+            buckets: ads.params.buckets,
+            levels: hiz_levels(tiles),
+            traversal: match traversal {
+                Traversal::Linear => 0,
+                Traversal::HiZ => 1,
+            },
+            budget: self.budget,
+            capacity: self.capacity,
+            with_stats: stats.is_some() as u32,
+            ..Default::default()
+        };
+        let uniform = self
+            .params
+            .entry(params)
+            .or_insert_with(|| {
+                gpu.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("trace params"),
+                        contents: bytemuck::bytes_of(&params),
+                        usage: wgpu::BufferUsages::UNIFORM,
+                    })
+            })
+            .clone();
+        let stats_buf = stats.unwrap_or(&self.no_stats);
+        let stats_bytes = if stats.is_some() { n * 16 } else { 16 };
+        let entries = [
+            (0, binding(rays, n * 32)),
+            (1, binding(hits, n * 16)),
+            (2, ads.tris.as_entire_binding()),
+            (3, ads.views_uniform.as_entire_binding()),
+            (4, uniform.as_entire_binding()),
+            (5, ads.hiz.as_entire_binding()),
+            (6, ads.offsets.as_entire_binding()),
+            (7, ads.ids.as_entire_binding()),
+            (8, binding(stats_buf, stats_bytes)),
+            (9, pool.as_entire_binding()),
+        ]
+        .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource });
+        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("trace"),
+            layout: &gpu.pipelines.trace.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        {
+            let (x, y) = grid(gpu, n.div_ceil(64));
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("trace"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&gpu.pipelines.trace);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        self.bind = Some(bind);
+        self.encode_schedule(gpu, enc, &pool);
+        self.encode_continue(gpu, enc)
+    }
+
+    fn encode_schedule(&mut self, gpu: &Gpu, enc: &mut wgpu::CommandEncoder, pool: &wgpu::Buffer) {
+        let bind = self.schedule_bind.get_or_insert_with(|| {
+            crate::bind_buffers(
+                gpu,
+                "trace schedule",
+                &gpu.pipelines.schedule.get_bind_group_layout(0),
+                &[(9, pool), (10, &self.dispatch)],
+            )
+        });
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("trace schedule"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&gpu.pipelines.schedule);
+        pass.set_bind_group(0, &*bind, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// Records [`TraceResources::rounds`] more continuation rounds of the
+    /// last trace recorded (a round with no ray left dispatches nothing).
+    pub fn encode_continue(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        let (Some(bind), Some(pool)) = (self.bind.clone(), self.pool.clone()) else {
+            // No trace recorded, or an empty one: nothing is unfinished.
+            return Ok(());
+        };
+        for _ in 0..self.rounds {
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("trace_continue"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&gpu.pipelines.trace_continue);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.dispatch_workgroups_indirect(&self.dispatch, 0);
+            }
+            self.encode_schedule(gpu, enc, &pool);
+        }
+        Ok(())
+    }
+
+    /// Records a copy of the pool's [`PoolHeader`] into `dst` at `offset`
+    /// (which needs `COPY_DST`).
+    pub fn encode_copy_header(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        dst: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        if let Some(pool) = &self.pool {
+            enc.copy_buffer_to_buffer(pool, 0, dst, offset, HEADER_BYTES);
+        }
+    }
+
+    /// The pool's header read back (waits for the GPU).
+    pub fn read_header(&self, gpu: &Gpu) -> Result<PoolHeader, GpuError> {
+        match &self.pool {
+            None => Ok(PoolHeader::default()),
+            Some(pool) => Ok(bytemuck::pod_read_unaligned(&read_back(
+                gpu,
+                pool,
+                0,
+                HEADER_BYTES,
+            )?)),
+        }
+    }
+
+    /// The host-slice wrapper: uploads `rays`, records the trace, submits,
+    /// reads the hits (and statistics) back; records more rounds while rays
+    /// are unfinished.
+    pub fn trace_host(
+        &mut self,
+        gpu: &Gpu,
+        ads: &GpuAds,
+        rays: &[Ray],
+        traversal: Traversal,
+        with_stats: bool,
+    ) -> Result<Traced, GpuError> {
+        let mut out = Traced {
+            hits: Vec::with_capacity(rays.len()),
+            stats: Vec::with_capacity(if with_stats { rays.len() } else { 0 }),
+            ..Default::default()
+        };
+        let chunk = CHUNK.min(Self::max_rays(gpu).max(1) as usize);
+        for part in rays.chunks(chunk) {
+            let n = part.len() as u64;
+            let ray_buf = crate::storage_init(
+                gpu,
+                "rays",
+                bytemuck::cast_slice(part),
+                wgpu::BufferUsages::empty(),
+            );
+            let out_buf = |label| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: (n * 16).max(16),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                })
+            };
+            let hit_buf = out_buf("hits");
+            let stat_buf = with_stats.then(|| out_buf("stats"));
+            let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("trace readback"),
+                size: HEADER_BYTES + n * 32,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            self.encode_trace(
+                gpu,
+                &mut enc,
+                ads,
+                &ray_buf,
+                &hit_buf,
+                stat_buf.as_ref(),
+                part.len() as u32,
+                traversal,
+            )?;
+            loop {
+                self.encode_copy_header(&mut enc, &staging, 0);
+                enc.copy_buffer_to_buffer(&hit_buf, 0, &staging, HEADER_BYTES, n * 16);
+                if let Some(s) = &stat_buf {
+                    enc.copy_buffer_to_buffer(s, 0, &staging, HEADER_BYTES + n * 16, n * 16);
+                }
+                gpu.queue.submit([enc.finish()]);
+                out.submissions += 1;
+                let bytes = map_read(gpu, &staging)?;
+                let head: PoolHeader =
+                    bytemuck::pod_read_unaligned(&bytes[..HEADER_BYTES as usize]);
+                if head.count_in == 0 {
+                    out.rounds += head.rounds;
+                    let at = HEADER_BYTES as usize;
+                    let hit_end = at + (n * 16) as usize;
+                    out.hits
+                        .extend(bytemuck::pod_collect_to_vec::<u8, Hit>(&bytes[at..hit_end]));
+                    if with_stats {
+                        out.stats
+                            .extend(bytemuck::pod_collect_to_vec::<u8, RayStats>(
+                                &bytes[hit_end..hit_end + (n * 16) as usize],
+                            ));
+                    }
+                    break;
+                }
+                enc = gpu.device.create_command_encoder(&Default::default());
+                self.encode_continue(gpu, &mut enc)?;
+            }
+        }
+        Ok(out)
+    }
 }

@@ -1,24 +1,26 @@
 //! DIRT on the GPU as a [`Tracer`]: [`DirtGpu`] builds a [`GpuAds`] and traces
-//! every ray of a call in one [`trace_report`].
+//! every ray of a call through its [`TraceResources`], kept between calls.
 
-use crate::trace::trace_report;
+use crate::trace::TraceResources;
 use crate::{Gpu, GpuAds, GpuError};
 use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
     Triangle, check_lengths,
 };
 
-/// DIRT on the GPU behind [`Tracer`]. Rays that spend the GPU's per-ray work
-/// budget are finished by the CPU reference inside [`trace_report`] (the same
-/// bits); each trace reports how many, and [`DirtGpu::cpu_finished`] sums them.
+/// DIRT on the GPU behind [`Tracer`]. Rays that spend the GPU's per-dispatch
+/// work budget are continued on the GPU (see [`crate::trace`]); each trace
+/// reports its continuation rounds, and [`DirtGpu::rounds`] sums them.
 #[derive(Debug)]
 pub struct DirtGpu<'g> {
     gpu: &'g Gpu,
     pub params: AdsParams,
     pub traversal: Traversal,
     ads: Option<GpuAds>,
-    /// Rays finished by the CPU so far.
-    pub cpu_finished: usize,
+    /// The trace's buffers, kept from call to call.
+    pub resources: TraceResources,
+    /// Continuation rounds so far.
+    pub rounds: u64,
 }
 
 impl<'g> DirtGpu<'g> {
@@ -29,7 +31,8 @@ impl<'g> DirtGpu<'g> {
             params,
             traversal,
             ads: None,
-            cpu_finished: 0,
+            resources: TraceResources::new(gpu),
+            rounds: 0,
         }
     }
 
@@ -50,17 +53,35 @@ impl<'g> DirtGpu<'g> {
     /// A tracer over a structure already built.
     pub fn from_ads(gpu: &'g Gpu, ads: GpuAds, traversal: Traversal) -> Self {
         Self {
-            gpu,
             params: ads.params,
-            traversal,
             ads: Some(ads),
-            cpu_finished: 0,
+            ..Self::new(gpu, AdsParams::default(), traversal)
         }
     }
 
     /// The structure of the last build.
     pub fn ads(&self) -> Option<&GpuAds> {
         self.ads.as_ref()
+    }
+
+    /// Records the trace of `count` rays of `rays` into `enc` without
+    /// submitting (see [`TraceResources::encode_trace`] for the buffers).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_trace(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        rays: &wgpu::Buffer,
+        hits: &wgpu::Buffer,
+        stats: Option<&wgpu::Buffer>,
+        count: u32,
+    ) -> Result<(), GpuError> {
+        let ads = self.ads.as_ref().ok_or_else(|| {
+            GpuError::Params(CoreError::NotBuilt {
+                tracer: "dirt-gpu".into(),
+            })
+        })?;
+        self.resources
+            .encode_trace(self.gpu, enc, ads, rays, hits, stats, count, self.traversal)
     }
 }
 
@@ -93,15 +114,18 @@ impl Tracer for DirtGpu<'_> {
         if rays.is_empty() {
             return Ok(TraceReport::default());
         }
-        let t = trace_report(self.gpu, ads, rays, self.traversal).map_err(CoreError::from)?;
-        hits.copy_from_slice(&t.hits);
         let with_stats = stats.is_some();
+        let t = self
+            .resources
+            .trace_host(self.gpu, ads, rays, self.traversal, with_stats)
+            .map_err(CoreError::from)?;
+        hits.copy_from_slice(&t.hits);
         if let Some(s) = stats {
             s.copy_from_slice(&t.stats);
         }
-        self.cpu_finished += t.cpu_finished;
+        self.rounds += t.rounds as u64;
         Ok(TraceReport {
-            finished_elsewhere: t.cpu_finished,
+            continuation_rounds: t.rounds as usize,
             stats: with_stats,
         })
     }

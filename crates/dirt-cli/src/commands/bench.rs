@@ -331,11 +331,10 @@ fn bench_gpu(
         // The GPU's statistics come back with its hits: count them in the timed traces.
         let m =
             measure::trace(&mut tracer, bench.rays, k, StatsPass::Timed).context("cannot trace")?;
-        if m.finished_elsewhere > 0 {
+        if m.continuation_rounds > 0 {
             eprintln!(
-                "gpu: {} of {} rays spent their GPU work budget and were finished by the CPU reference (included in the time)",
-                m.finished_elsewhere,
-                bench.rays.len()
+                "gpu: rays that spent a dispatch's work budget took {} continuation rounds on the GPU (included in the time)",
+                m.continuation_rounds
             );
         }
         let mut row = bench.row(&subject.with_traversal(traversal), &m);

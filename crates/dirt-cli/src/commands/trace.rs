@@ -186,10 +186,10 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         .trace_into(&rays, &mut hits, None)
         .with_context(|| format!("cannot trace ({})", tracer.name()))?;
     let trace_time = start.elapsed();
-    if report.finished_elsewhere > 0 {
+    if report.continuation_rounds > 0 {
         eprintln!(
-            "gpu: {} rays spent their GPU work budget and were finished by the CPU reference",
-            report.finished_elsewhere
+            "gpu: rays that spent a dispatch's work budget took {} continuation rounds on the GPU",
+            report.continuation_rounds
         );
     }
     npy::write_hits(&args.out, &hits)?;
