@@ -243,3 +243,159 @@ fn oversized_structure_is_a_clear_error() {
         other => panic!("expected TooLarge, got {other:?}"),
     }
 }
+
+/// As a wgpu application would: its own device and queue, its own ray and hit
+/// buffers, its own encoder. `encode_trace` only records: until the
+/// application submits, the hit buffer keeps what it held; after, it holds
+/// the CPU's hits bit for bit.
+#[test]
+fn an_applications_device_and_buffers_trace_when_it_submits() {
+    use dirt_gpu::wgpu;
+    use wgpu::util::DeviceExt;
+    // Only for the skip rule and the adapter's facts; the device is the test's own.
+    if exact_gpu("an_applications_device_and_buffers_trace_when_it_submits").is_none() {
+        return;
+    }
+    let (device, queue) =
+        pollster::block_on(dirt_gpu::Gpu::open_device()).expect("the application's device");
+    let gpu = dirt_gpu::Gpu::from_device(&device, &queue, &dirt_gpu::GpuOptions::default())
+        .expect("dirt on the application's device");
+    assert!(gpu.exact, "{}", gpu.exactness);
+    let scene = dirt_scene::builtin("cornell").expect("built-in");
+    let tris = &scene.triangles;
+    let rays = adversarial_rays(tris, 10, 3);
+    let params = AdsParams {
+        resolution: 32,
+        ..AdsParams::default()
+    };
+    let ads = GpuAds::build(&gpu, tris, &params).expect("gpu build");
+    let ray_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("app rays"),
+        contents: bytemuck::cast_slice(&rays),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let sentinel = vec![0xabu8; rays.len() * 16];
+    let hit_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("app hits"),
+        contents: &sentinel,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+    });
+    let read = |buf: &wgpu::Buffer| -> Vec<u8> {
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: buf.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buf, 0, &staging, 0, buf.size());
+        queue.submit([enc.finish()]);
+        staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map"));
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("poll");
+        staging.get_mapped_range(..).expect("mapped").to_vec()
+    };
+    let mut res = TraceResources::new(&gpu);
+    let mut enc = device.create_command_encoder(&Default::default());
+    res.encode_trace(
+        &gpu,
+        &mut enc,
+        &ads,
+        &ray_buf,
+        &hit_buf,
+        None,
+        rays.len() as u32,
+        Traversal::HiZ,
+    )
+    .expect("encode");
+    assert_eq!(read(&hit_buf), sentinel, "encode_trace must not submit");
+    queue.submit([enc.finish()]);
+    let got: Vec<dirt_math::Hit> = bytemuck::pod_collect_to_vec(&read(&hit_buf));
+    let cpu = Ads::build(tris, &params).expect("cpu build");
+    let (want, _) = trace_with_stats(&cpu, tris, &rays, Traversal::HiZ);
+    assert_eq!(res.read_header(&gpu).expect("header").count_in, 0);
+    for i in 0..rays.len() {
+        assert_eq!(got[i].bits(), want[i].bits(), "ray {i}");
+    }
+}
+
+/// Buffers handed in by the caller are checked before anything is recorded:
+/// too small, or without `STORAGE`, is an error that names the buffer.
+#[test]
+fn callers_buffers_of_the_wrong_size_or_usage_are_errors() {
+    use dirt_gpu::wgpu;
+    let Some(g) = any_gpu("callers_buffers_of_the_wrong_size_or_usage_are_errors") else {
+        return;
+    };
+    let tris = random_scene(5, 10, 1.0);
+    let ads = GpuAds::build(g, &tris, &AdsParams::default()).expect("gpu build");
+    let buf = |size, usage| {
+        g.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    let storage = wgpu::BufferUsages::STORAGE;
+    let rays_ok = buf(32 * 10, storage);
+    let hits_ok = buf(16 * 10, storage);
+    let cases = [
+        (
+            "the ray buffer",
+            buf(32 * 9, storage),
+            buf(16 * 10, storage),
+        ),
+        (
+            "the hit buffer",
+            buf(32 * 10, storage),
+            buf(16 * 9, storage),
+        ),
+        (
+            "the hit buffer",
+            buf(32 * 10, storage),
+            buf(16 * 10, wgpu::BufferUsages::COPY_SRC),
+        ),
+    ];
+    let mut res = TraceResources::new(g);
+    for (what, rays, hits) in &cases {
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        match res.encode_trace(g, &mut enc, &ads, rays, hits, None, 10, Traversal::Linear) {
+            Err(dirt_gpu::GpuError::Buffer { what: w, problem }) => {
+                assert_eq!(w, *what, "{problem}");
+            }
+            other => panic!("{what}: expected a buffer error, got {other:?}"),
+        }
+    }
+    let mut enc = g.device.create_command_encoder(&Default::default());
+    let small_stats = buf(16, storage);
+    assert!(matches!(
+        res.encode_trace(
+            g,
+            &mut enc,
+            &ads,
+            &rays_ok,
+            &hits_ok,
+            Some(&small_stats),
+            10,
+            Traversal::Linear
+        ),
+        Err(dirt_gpu::GpuError::Buffer { .. })
+    ));
+    res.budget = 0;
+    assert!(
+        res.encode_trace(
+            g,
+            &mut enc,
+            &ads,
+            &rays_ok,
+            &hits_ok,
+            None,
+            10,
+            Traversal::Linear
+        )
+        .is_err(),
+        "a zero budget could never finish a ray"
+    );
+}

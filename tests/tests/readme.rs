@@ -37,6 +37,76 @@ fn the_readme_example_runs() {
     cpu_example().expect("README example");
 }
 
+/// The README's embedding example: an application's device, queue, buffers and encoder.
+fn gpu_example(
+    device: &dirt_gpu::wgpu::Device,
+    queue: &dirt_gpu::wgpu::Queue,
+    ray_buffer: &dirt_gpu::wgpu::Buffer,
+    hit_buffer: &dirt_gpu::wgpu::Buffer,
+    rays: &[dirt_math::Ray],
+) -> Result<(), Box<dyn Error>> {
+    use dirt_core::{Tracer, Traversal};
+    let scene = dirt_scene::open("cornell")?;
+    let count = rays.len() as u32; // rays in ray_buffer
+    // README GPU BEGIN
+    use dirt_gpu::{DirtGpu, Gpu, GpuOptions, wgpu}; // dirt's wgpu: the same version as yours
+    let gpu = Gpu::from_device(device, queue, &GpuOptions::default())?;
+    let mut dirt = DirtGpu::new(&gpu, dirt_core::AdsParams::default(), Traversal::HiZ);
+    dirt.build(&scene.triangles)?;
+    // rays: STORAGE, 32 bytes a ray (dirt_math::Ray); hits: STORAGE, 16 bytes a hit (dirt_math::Hit)
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    dirt.encode_trace(&mut encoder, ray_buffer, hit_buffer, None, count)?;
+    queue.submit([encoder.finish()]); // the trace runs from here
+    // README GPU END
+    Ok(())
+}
+
+#[test]
+fn the_readme_gpu_example_runs() {
+    use dirt_gpu::wgpu::{self, util::DeviceExt};
+    if dirt_gpu::testing::exact_gpu("the_readme_gpu_example_runs").is_none() {
+        return;
+    }
+    let (device, queue) = pollster::block_on(dirt_gpu::Gpu::open_device()).expect("a device");
+    let rays = [dirt_math::Ray::new(
+        dirt_math::Vec3::new(0.0, 1.0, 1.9),
+        dirt_math::Vec3::new(0.0, 0.0, -1.0),
+        0.0,
+        f32::INFINITY,
+    )];
+    let ray_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytemuck::cast_slice(&rays),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let hit_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: 16,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    gpu_example(&device, &queue, &ray_buffer, &hit_buffer, &rays).expect("README GPU example");
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: 16,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(&hit_buffer, 0, &staging, 0, 16);
+    queue.submit([enc.finish()]);
+    staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map"));
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .expect("poll");
+    let hit: dirt_math::Hit =
+        bytemuck::pod_read_unaligned(&staging.get_mapped_range(..).expect("mapped"));
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    let truth = dirt_cpu::brute_force::trace(&scene.triangles, &rays);
+    assert!(hit.is_hit());
+    assert_eq!(hit.bits(), truth[0].bits());
+}
+
 /// The text without any whitespace, so rustfmt's layout here and the README's
 /// compare equal.
 fn squeeze(s: &str) -> String {
@@ -52,5 +122,11 @@ fn the_readme_shows_this_example() {
     assert!(
         squeeze(include_str!("../../README.md")).contains(&example),
         "README.md's `Using the crates` example differs from tests/tests/readme.rs"
+    );
+    let start = me.find("// README GPU BEGIN").expect("begin marker") + "// README GPU BEGIN".len();
+    let end = me.find("    // README GPU END").expect("end marker");
+    assert!(
+        squeeze(include_str!("../../README.md")).contains(&squeeze(&me[start..end])),
+        "README.md's embedding example differs from tests/tests/readme.rs"
     );
 }

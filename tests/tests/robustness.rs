@@ -1137,15 +1137,33 @@ fn scenes_beyond_gpu_limits_are_refused_by_name() {
             other => panic!("limit {limit}: expected TooLarge for {expect}, got {other:?}"),
         }
     }
-    // Rays: one chunk of 2^18 rays is 8 MiB; a limit below that refuses the trace.
+    // Rays are traced in chunks that fit the binding limit (the continuation
+    // pool, 72 bytes a ray, is the largest binding): a low limit makes more
+    // chunks, not a refusal, and the same hits.
     g.limits.max_storage_buffer_binding_size = 1 << 30;
     let ads = dirt_gpu::GpuAds::build(&g, &tris, &params).expect("fits");
-    g.limits.max_storage_buffer_binding_size = 1000;
     let rays = adversarial_rays(&tris, 10, 31);
+    let whole = dirt_gpu::trace::trace_report(&g, &ads, &rays, Traversal::Linear).expect("trace");
+    g.limits.max_storage_buffer_binding_size = 1000;
+    let chunked = dirt_gpu::trace::trace_report(&g, &ads, &rays, Traversal::Linear)
+        .expect("traced in chunks");
+    assert!(
+        chunked.submissions as usize >= rays.len() / 13,
+        "{} submissions",
+        chunked.submissions
+    );
+    assert_eq!(whole.hits.len(), chunked.hits.len());
+    for (a, b) in whole.hits.iter().zip(&chunked.hits) {
+        assert_eq!(a.bits(), b.bits());
+    }
+    // Below one ray's place in the pool, nothing can be traced: refused by name.
+    g.limits.max_storage_buffer_binding_size = 80;
     match dirt_gpu::trace::trace(&g, &ads, &rays, Traversal::Linear) {
-        Err(dirt_gpu::GpuError::TooLarge { what: "rays", .. }) => {}
+        Err(dirt_gpu::GpuError::TooLarge { what, .. }) => {
+            assert!(what.contains("continuation pool"), "{what}")
+        }
         other => panic!(
-            "expected TooLarge for rays, got {:?}",
+            "expected TooLarge for the pool, got {:?}",
             other.map(|h| h.0.len())
         ),
     }

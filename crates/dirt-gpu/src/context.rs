@@ -204,3 +204,23 @@ impl Gpu {
             .map_err(|e| GpuError::Device(e.to_string()))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The exact path needs Vulkan, passthrough shaders, and no request for plain WGSL.
+    #[test]
+    fn the_exact_path_is_decided_in_one_place() {
+        let pass = wgpu::Features::PASSTHROUGH_SHADERS;
+        let none = wgpu::Features::empty();
+        let default = GpuOptions::default();
+        let plain = GpuOptions { plain_wgsl: true };
+        assert!(exact_path(wgpu::Backend::Vulkan, pass, &default).0);
+        assert!(!exact_path(wgpu::Backend::Vulkan, none, &default).0);
+        assert!(!exact_path(wgpu::Backend::Metal, pass, &default).0);
+        assert!(!exact_path(wgpu::Backend::BrowserWebGpu, none, &default).0);
+        let (exact, why) = exact_path(wgpu::Backend::Vulkan, pass, &plain);
+        assert!(!exact && why.contains("plain WGSL"), "{why}");
+    }
+}

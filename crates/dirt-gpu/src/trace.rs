@@ -165,6 +165,7 @@ impl TraceResources {
     /// The most rays one encode call takes on `gpu`: the pool must fit one
     /// binding, and a continuation dispatch one row of workgroups.
     pub fn max_rays(gpu: &Gpu) -> u32 {
+        // The pool (72 bytes a ray) is the largest binding; rays take 32, hits 16.
         let by_binding = gpu
             .limits
             .max_storage_buffer_binding_size
