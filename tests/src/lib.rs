@@ -609,3 +609,22 @@ pub fn box_mesh(min: Vec3, max: Vec3, n: u32) -> Mesh {
     }
     m
 }
+
+/// A buffer's bytes as an application reads them: its own staging buffer,
+/// copy, submit, map, wait. `buf` needs `COPY_SRC`.
+pub fn read_buffer(device: &wgpu::Device, queue: &wgpu::Queue, buf: &wgpu::Buffer) -> Vec<u8> {
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: buf.size(),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buf, 0, &staging, 0, buf.size());
+    queue.submit([enc.finish()]);
+    staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map"));
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .expect("poll");
+    staging.get_mapped_range(..).expect("mapped").to_vec()
+}

@@ -280,22 +280,7 @@ fn an_applications_device_and_buffers_trace_when_it_submits() {
         contents: &sentinel,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
     });
-    let read = |buf: &wgpu::Buffer| -> Vec<u8> {
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: None,
-            size: buf.size(),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buf, 0, &staging, 0, buf.size());
-        queue.submit([enc.finish()]);
-        staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map"));
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .expect("poll");
-        staging.get_mapped_range(..).expect("mapped").to_vec()
-    };
+    let read = |buf: &wgpu::Buffer| dirt_tests::read_buffer(&device, &queue, buf);
     let mut res = TraceResources::new(&gpu);
     let mut enc = device.create_command_encoder(&Default::default());
     res.encode_trace(

@@ -86,21 +86,8 @@ fn the_readme_gpu_example_runs() {
         mapped_at_creation: false,
     });
     gpu_example(&device, &queue, &ray_buffer, &hit_buffer, &rays).expect("README GPU example");
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: 16,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = device.create_command_encoder(&Default::default());
-    enc.copy_buffer_to_buffer(&hit_buffer, 0, &staging, 0, 16);
-    queue.submit([enc.finish()]);
-    staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map"));
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("poll");
     let hit: dirt_math::Hit =
-        bytemuck::pod_read_unaligned(&staging.get_mapped_range(..).expect("mapped"));
+        bytemuck::pod_read_unaligned(&dirt_tests::read_buffer(&device, &queue, &hit_buffer));
     let scene = dirt_scene::open("cornell").expect("cornell");
     let truth = dirt_cpu::brute_force::trace(&scene.triangles, &rays);
     assert!(hit.is_hit());
