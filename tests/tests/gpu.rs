@@ -125,7 +125,7 @@ fn params_strategy() -> impl Strategy<Value = AdsParams> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(ProptestConfig::with_cases(128))]
     #[test]
     fn gpu_equals_cpu_bit_for_bit(seed in any::<u64>(), n in 1usize..80, scale in prop::sample::select(vec![1.0f32, 1e-3, 300.0]), params in params_strategy(), budget in prop::sample::select(vec![30u32, 60, 120])) {
         let tris = random_scene(seed, n, scale);
