@@ -47,6 +47,13 @@ mod embedded {
 /// `shaders/wgsl/<stage>.wgsl` and `dirt_gpu::<stage>` carry these names.
 pub const STAGES: [&str; 4] = ["fill_depth", "mip_depth", "fill_primitives", "trace"];
 
+/// The stages that turn an application's input into what the build reads, for
+/// builds recorded on the GPU: `gather` (its meshes into triangles) and
+/// `views` (the view set from the triangles' bounds). Both backends share
+/// their CPU reference, `dirt_core::<stage>`; `shaders/wgsl/<stage>.wgsl` and
+/// `dirt_gpu::<stage>` carry the same names.
+pub const PREPARE_STAGES: [&str; 2] = ["gather", "views"];
+
 /// The naga capabilities the shaders are validated against.
 ///
 /// Empty: the WebGPU baseline, so the same WGSL runs in a browser. Widen only

@@ -52,7 +52,12 @@ fn fill(in: CoverOut) {
     }
     for (var k = l.x; k <= l.y; k++) {
         let at = atomicAdd(&lists[k], 1u);
-        ids[at] = in.prim;
+        // A build into ids sized ahead of the count (GpuAds::encode_build) may
+        // find them too small: nothing is written past the end, and the trace
+        // sees offsets' total above the ids' length and reports every ray.
+        if at < arrayLength(&ids) {
+            ids[at] = in.prim;
+        }
     }
 }
 

@@ -553,6 +553,15 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if r >= params.n_rays {
         return;
     }
+    // Lists that did not fit their ids (a build recorded ahead of its count):
+    // the structure is incomplete, and every ray says so.
+    if offsets[params.n_slots * params.tiles * params.tiles * params.buckets] > arrayLength(&ids) {
+        hits[r] = Hit(STRUCTURE_FULL_ID, 0.0, 0.0, 0.0);
+        if params.with_stats == 1u {
+            stats[r] = RayStats(0u, 0u, 0u, 0u);
+        }
+        return;
+    }
     trace_ray(r, false);
 }
 

@@ -48,6 +48,8 @@ const INVALID_ID: u32 = 0xffffffffu;
 const NO_SLOT: u32 = 0xffffffffu;
 // dirt_gpu::UNFINISHED: the trace ran out of its work budget (work.wgsl).
 const UNFINISHED_ID: u32 = 0xfffffffeu;
+// dirt_gpu::STRUCTURE_FULL: the structure's lists did not fit their ids.
+const STRUCTURE_FULL_ID: u32 = 0xfffffffdu;
 
 // WGSL has no infinity literal: make them from bits.
 fn f32_inf() -> f32 {

@@ -35,7 +35,10 @@ fn check(stage: &str, wgsl_name: &str, rust: RustLayout) {
 
 #[test]
 fn shared_structs_match_their_wgsl() {
-    use dirt_gpu::{BuildParams, MipParams, PoolHeader, ScanParams, TraceParams};
+    use dirt_gpu::{
+        BuildParams, FrameState, GatherParams, MipParams, PoolHeader, ScanParams, TraceParams,
+        ViewsParams,
+    };
     use dirt_math::{Hit, Ray, RayStats, ViewGpu};
     check(
         "trace",
@@ -126,6 +129,38 @@ fn shared_structs_match_their_wgsl() {
         }),
     );
     check(
+        "views",
+        "ViewsParams",
+        rust_layout!(ViewsParams {
+            n_tris,
+            kind,
+            has_center,
+            _pad0,
+            center,
+            _pad1
+        }),
+    );
+    check(
+        "views",
+        "FrameState",
+        rust_layout!(FrameState { bounds, bad, reach }),
+    );
+    check(
+        "gather",
+        "GatherParams",
+        rust_layout!(GatherParams {
+            first_tri,
+            n_tris,
+            stride,
+            offset,
+            index_format,
+            first_index,
+            has_transform,
+            _pad,
+            rows
+        }),
+    );
+    check(
         "fill_primitives",
         "ScanParams",
         rust_layout!(ScanParams {
@@ -148,12 +183,14 @@ fn a_changed_field_is_caught() {
 #[test]
 fn each_stage_has_one_name_everywhere() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    for stage in dirt_shaders::STAGES {
+    let stages = dirt_shaders::STAGES.map(|s| (s, "crates/dirt-cpu/src"));
+    let prepare = dirt_shaders::PREPARE_STAGES.map(|s| (s, "crates/dirt-core/src"));
+    for (stage, cpu) in stages.into_iter().chain(prepare) {
         assert!(
             dirt_shaders::source(stage).is_some(),
             "shaders/wgsl/{stage}.wgsl is missing"
         );
-        for dir in ["crates/dirt-cpu/src", "crates/dirt-gpu/src"] {
+        for dir in [cpu, "crates/dirt-gpu/src"] {
             let p = root.join(dir).join(format!("{stage}.rs"));
             assert!(p.exists(), "{} is missing", p.display());
         }

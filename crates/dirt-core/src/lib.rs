@@ -8,6 +8,8 @@
 //! - [`AdsParams`] and [`Traversal`]: the knobs of the structure and of its walk.
 //! - [`views_for`]: the view set both backends build over, with the views no
 //!   triangle reaches left out ([`left_out_views`] says which and why).
+//! - [`gather`]: an application's mesh (vertex and index bytes, stride,
+//!   offset, transform) as triangles, the CPU reference of the GPU's `gather`.
 //! - [`IdLists`] and [`BuildTimings`]: the structure's lists and stage times, as
 //!   both backends produce them.
 //!
@@ -15,6 +17,7 @@
 //! re-exported here.
 
 mod error;
+pub mod gather;
 mod lists;
 mod params;
 mod tracer;

@@ -45,6 +45,18 @@ pub struct Gpu {
     /// Why [`Gpu::exact`] is what it is, in words.
     pub exactness: &'static str,
     pub(crate) pipelines: crate::Pipelines,
+    /// Submissions and host waits dirt made itself (see [`Gpu::host_syncs`]).
+    submits: std::sync::atomic::AtomicU64,
+    waits: std::sync::atomic::AtomicU64,
+}
+
+/// What dirt itself submitted and waited for on a [`Gpu`] so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HostSyncs {
+    /// Command buffers dirt submitted (not the application's).
+    pub submissions: u64,
+    /// Times dirt blocked the host until the GPU was done (a read-back or a wait).
+    pub waits: u64,
 }
 
 /// The one place the exact path is decided: NoContraction SPIR-V needs a
@@ -177,6 +189,8 @@ impl Gpu {
             exact,
             exactness,
             pipelines,
+            submits: Default::default(),
+            waits: Default::default(),
         })
     }
 
@@ -193,8 +207,28 @@ impl Gpu {
         self.info.name.contains("llvmpipe")
     }
 
+    /// Submissions and waits dirt made on this device so far. Recording
+    /// ([`crate::GpuAds::encode_build`], [`crate::TraceResources::encode_trace`])
+    /// makes none: an application's frame can check it.
+    pub fn host_syncs(&self) -> HostSyncs {
+        use std::sync::atomic::Ordering::Relaxed;
+        HostSyncs {
+            submissions: self.submits.load(Relaxed),
+            waits: self.waits.load(Relaxed),
+        }
+    }
+
+    /// Submits dirt's own commands (the host-slice wrappers and host builds).
+    pub(crate) fn submit(&self, enc: wgpu::CommandEncoder) {
+        self.submits
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.queue.submit([enc.finish()]);
+    }
+
     /// Waits for all submitted work.
     pub fn wait(&self) -> Result<(), GpuError> {
+        self.waits
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: None,

@@ -47,30 +47,41 @@ pub(crate) fn draw_coverage(
 ) {
     let target = tile_target(gpu, build.tiles);
     let mut enc = gpu.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("coverage"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Discard,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind, &[]);
-        for &v in content {
-            pass.draw(0..build.n_tris * 6, v..v + 1);
-        }
+    for &v in content {
+        record_coverage(&mut enc, &target, pipeline, bind, build.n_tris, v..v + 1);
     }
-    gpu.queue.submit([enc.finish()]);
+    gpu.submit(enc);
+}
+
+/// Records the coverage quads of `n_tris` triangles for the views (instances)
+/// in `views`; the vertex shader skips views without a slot.
+pub(crate) fn record_coverage(
+    enc: &mut wgpu::CommandEncoder,
+    target: &wgpu::TextureView,
+    pipeline: &wgpu::RenderPipeline,
+    bind: &wgpu::BindGroup,
+    n_tris: u32,
+    views: std::ops::Range<u32>,
+) {
+    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("coverage"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                store: wgpu::StoreOp::Discard,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind, &[]);
+    pass.draw(0..n_tris * 6, views);
 }
 
 pub(crate) fn fill_depth(

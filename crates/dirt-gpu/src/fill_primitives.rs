@@ -23,70 +23,97 @@ pub(crate) fn grid(gpu: &Gpu, groups: u64) -> (u32, u32) {
     }
 }
 
+/// The dispatches of an exclusive prefix sum of the first `n` u32 of one
+/// buffer, in place: made once for the buffer (block sums, uniforms, bind
+/// groups) and kept.
+#[derive(Debug)]
+pub(crate) struct Scan {
+    /// (pipeline is scan_add, bind group, workgroups) in recording order.
+    steps: Vec<(bool, wgpu::BindGroup, (u32, u32))>,
+}
+
+impl Scan {
+    pub(crate) fn new(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Scan {
+        // Levels: data (n), then per-block sums until one block holds everything.
+        let mut levels: Vec<(wgpu::Buffer, u64)> = Vec::new();
+        let mut sums_of: Vec<wgpu::Buffer> = Vec::new();
+        let mut count = n;
+        loop {
+            let blocks = count.div_ceil(SCAN_BLOCK);
+            sums_of.push(storage_init(
+                gpu,
+                "scan sums",
+                &vec![0u8; (blocks * 4) as usize],
+                wgpu::BufferUsages::empty(),
+            ));
+            levels.push((
+                if levels.is_empty() {
+                    data.clone()
+                } else {
+                    sums_of[sums_of.len() - 2].clone()
+                },
+                count,
+            ));
+            if blocks <= 1 {
+                break;
+            }
+            count = blocks;
+        }
+        let step = |add: bool, data: &wgpu::Buffer, sums: &wgpu::Buffer, n: u64| {
+            let u = uniform_init(
+                gpu,
+                "scan params",
+                bytemuck::bytes_of(&ScanParams {
+                    n: n as u32,
+                    ..Default::default()
+                }),
+            );
+            let pipeline = if add {
+                &gpu.pipelines.scan_add
+            } else {
+                &gpu.pipelines.scan_blocks
+            };
+            let bind = bind_buffers(
+                gpu,
+                "scan",
+                &pipeline.get_bind_group_layout(0),
+                &[(6, data), (7, sums), (8, &u)],
+            );
+            (add, bind, grid(gpu, n.div_ceil(SCAN_BLOCK)))
+        };
+        let mut steps = Vec::new();
+        for (k, (buf, n)) in levels.iter().enumerate() {
+            steps.push(step(false, buf, &sums_of[k], *n));
+        }
+        for k in (0..levels.len().saturating_sub(1)).rev() {
+            let (buf, n) = &levels[k];
+            steps.push(step(true, buf, &sums_of[k], *n));
+        }
+        Scan { steps }
+    }
+
+    pub(crate) fn record(&self, gpu: &Gpu, enc: &mut wgpu::CommandEncoder) {
+        for (add, bind, (x, y)) in &self.steps {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("scan"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(if *add {
+                &gpu.pipelines.scan_add
+            } else {
+                &gpu.pipelines.scan_blocks
+            });
+            pass.set_bind_group(0, bind, &[]);
+            pass.dispatch_workgroups(*x, *y, 1);
+        }
+    }
+}
+
 /// Exclusive prefix sum of the first `n` u32 of `data`, in place.
 fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
-    // Levels: data (n), then per-block sums until one block holds everything.
-    let mut levels: Vec<(wgpu::Buffer, u64)> = Vec::new();
-    let mut sums_of: Vec<wgpu::Buffer> = Vec::new();
-    let mut count = n;
-    loop {
-        let blocks = count.div_ceil(SCAN_BLOCK);
-        sums_of.push(storage_init(
-            gpu,
-            "scan sums",
-            &vec![0u8; (blocks * 4) as usize],
-            wgpu::BufferUsages::empty(),
-        ));
-        levels.push((
-            if levels.is_empty() {
-                data.clone()
-            } else {
-                sums_of[sums_of.len() - 2].clone()
-            },
-            count,
-        ));
-        if blocks <= 1 {
-            break;
-        }
-        count = blocks;
-    }
     let mut enc = gpu.device.create_command_encoder(&Default::default());
-    let mut keep = Vec::new();
-    let mut run = |enc: &mut wgpu::CommandEncoder,
-                   pipeline: &wgpu::ComputePipeline,
-                   data: &wgpu::Buffer,
-                   sums: &wgpu::Buffer,
-                   n: u64| {
-        let u = uniform_init(
-            gpu,
-            "scan params",
-            bytemuck::bytes_of(&ScanParams {
-                n: n as u32,
-                ..Default::default()
-            }),
-        );
-        let bind = bind_buffers(
-            gpu,
-            "scan",
-            &pipeline.get_bind_group_layout(0),
-            &[(6, data), (7, sums), (8, &u)],
-        );
-        let (x, y) = grid(gpu, n.div_ceil(SCAN_BLOCK));
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-        drop(pass);
-        keep.push(u);
-    };
-    for (k, (buf, n)) in levels.iter().enumerate() {
-        run(&mut enc, &gpu.pipelines.scan_blocks, buf, &sums_of[k], *n);
-    }
-    for k in (0..levels.len().saturating_sub(1)).rev() {
-        let (buf, n) = &levels[k];
-        run(&mut enc, &gpu.pipelines.scan_add, buf, &sums_of[k], *n);
-    }
-    gpu.queue.submit([enc.finish()]);
+    Scan::new(gpu, data, n).record(gpu, &mut enc);
+    gpu.submit(enc);
     gpu.wait()
 }
 
@@ -142,7 +169,7 @@ pub(crate) fn fill_primitives(
         );
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.copy_buffer_to_buffer(&lists, 0, &cursors, 0, (n_lists + 1) * 4);
-        gpu.queue.submit([enc.finish()]);
+        gpu.submit(enc);
         let p = &gpu.pipelines.fill;
         let bind = bind_buffers(
             gpu,

@@ -19,6 +19,8 @@
 mod context;
 pub mod fill_depth;
 pub mod fill_primitives;
+pub mod frame;
+pub mod gather;
 pub mod mip_depth;
 pub mod params;
 pub mod selftest;
@@ -26,9 +28,15 @@ pub mod spirv;
 pub mod testing;
 pub mod trace;
 pub mod tracer;
+pub mod views;
 
-pub use context::{Gpu, GpuOptions, exact_path};
-pub use params::{BuildParams, MipParams, PoolHeader, ScanParams, TraceParams};
+pub use context::{Gpu, GpuOptions, HostSyncs, exact_path};
+pub use frame::BuildFeedback;
+pub use gather::GpuMesh;
+pub use params::{
+    BuildParams, FrameState, GatherParams, MipParams, PoolHeader, ScanParams, TraceParams,
+    ViewsParams,
+};
 pub use trace::TraceResources;
 pub use tracer::DirtGpu;
 /// The wgpu this crate is built with: hand [`Gpu::from_device`] a device of this version.
@@ -86,6 +94,10 @@ pub(crate) struct Pipelines {
     trace: wgpu::ComputePipeline,
     trace_continue: wgpu::ComputePipeline,
     schedule: wgpu::ComputePipeline,
+    clear_depth: wgpu::ComputePipeline,
+    gather: wgpu::ComputePipeline,
+    /// `views.wgsl`'s entries, one layout: bounds, views_from_bounds, reach, leave_out.
+    views: [wgpu::ComputePipeline; 4],
 }
 
 /// Render target format of the raster passes. Nothing is written to it (the
@@ -170,6 +182,18 @@ impl Pipelines {
         let md = spirv::compile(device, "mip_depth", passthrough)?;
         let fp = spirv::compile(device, "fill_primitives", passthrough)?;
         let tr = spirv::compile(device, "trace", passthrough)?;
+        let vw = spirv::compile(device, "views", passthrough)?;
+        let ga = spirv::compile(device, "gather", passthrough)?;
+        let views: [wgpu::ComputePipeline; 4] = compute_sharing(
+            device,
+            &vw,
+            &["bounds", "views_from_bounds", "reach", "leave_out"],
+        )?
+        .try_into()
+        .map_err(|_| GpuError::Shader {
+            stage: "views",
+            message: "expected four pipelines".into(),
+        })?;
         let [trace, trace_continue]: [wgpu::ComputePipeline; 2] =
             compute_sharing(device, &tr, &["trace", "trace_continue"])?
                 .try_into()
@@ -187,6 +211,9 @@ impl Pipelines {
             trace,
             trace_continue,
             schedule: compute(device, &tr, "schedule")?,
+            clear_depth: compute(device, &fd, "clear_depth")?,
+            gather: compute(device, &ga, "gather")?,
+            views,
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader {
@@ -202,11 +229,21 @@ impl Pipelines {
 #[derive(Debug)]
 pub struct GpuAds {
     pub params: AdsParams,
-    pub views: ViewSet,
+    /// The view set, when the host computed it ([`GpuAds::build`]); `None` for
+    /// a structure built in a frame ([`GpuAds::frame`]), whose views the GPU
+    /// computes ([`GpuAds::read_views`] reads them).
+    pub views: Option<ViewSet>,
     pub n_tris: u32,
+    /// List entries: exact for [`GpuAds::build`]; for a frame structure, 0
+    /// ([`GpuAds::feedback`] has the count of the latest completed build).
     pub nodes: u32,
-    /// Wall time of each build stage (submission to completion).
+    /// Wall time of each build stage (submission to completion) of
+    /// [`GpuAds::build`]; zero for a frame structure, whose stages are not waited for.
     pub timings: BuildTimings,
+    /// Views in the set, and per-view blocks in the per-tile buffers (views
+    /// with content for [`GpuAds::build`]; every view for a frame structure).
+    pub(crate) n_views: u32,
+    pub(crate) n_slots: u32,
     pub(crate) tris: wgpu::Buffer,
     pub(crate) views_uniform: wgpu::Buffer,
     /// All Hi-Z levels, level 0 (the depth bounds) first; two u32 per cell.
@@ -214,6 +251,8 @@ pub struct GpuAds {
     /// `slots·tiles²·B + 1` offsets after the scan (views without content have none).
     pub(crate) offsets: wgpu::Buffer,
     pub(crate) ids: wgpu::Buffer,
+    /// The kept parts of a frame structure ([`GpuAds::frame`]).
+    pub(crate) frame: Option<Box<frame::Frame>>,
 }
 
 /// Checks that one binding of `bytes` fits the adapter.
@@ -293,7 +332,7 @@ pub(crate) fn read_back(
     });
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(src, offset, &staging, 0, size);
-    gpu.queue.submit([enc.finish()]);
+    gpu.submit(enc);
     map_read(gpu, &staging)
 }
 
@@ -317,7 +356,7 @@ pub(crate) fn map_read(gpu: &Gpu, staging: &wgpu::Buffer) -> Result<Vec<u8>, Gpu
 }
 
 /// The views as the shaders read them: always six entries (unused ones zero).
-fn views_gpu(views: &ViewSet) -> [ViewGpu; 6] {
+pub(crate) fn views_gpu(views: &ViewSet) -> [ViewGpu; 6] {
     let mut out = [ViewGpu::default(); 6];
     for (k, v) in views.views.iter().enumerate().take(6) {
         out[k] = ViewGpu::new(v, views.adjacency.get(k).copied().unwrap_or([0; 4]));
@@ -391,7 +430,9 @@ impl GpuAds {
         let t3 = Instant::now();
         Ok(GpuAds {
             params: *params,
-            views,
+            n_views,
+            n_slots,
+            views: Some(views),
             n_tris,
             nodes,
             timings: BuildTimings {
@@ -404,6 +445,7 @@ impl GpuAds {
             hiz,
             offsets,
             ids,
+            frame: None,
         })
     }
 
@@ -413,10 +455,17 @@ impl GpuAds {
         self.hiz.size() + self.offsets.size() + self.ids.size()
     }
 
+    /// The views as the passes read them (six entries; a view without
+    /// content has slot [`dirt_math::view::NO_SLOT`]).
+    pub fn read_views(&self, gpu: &Gpu) -> Result<Vec<ViewGpu>, GpuError> {
+        let bytes = read_back(gpu, &self.views_uniform, 0, 6 * 96)?;
+        Ok(bytemuck::pod_collect_to_vec::<u8, ViewGpu>(&bytes))
+    }
+
     /// Hi-Z levels read back, level 0 (the depth bounds) first, in the CPU's layout.
     pub fn read_hiz(&self, gpu: &Gpu) -> Result<Vec<Vec<[u32; 2]>>, GpuError> {
         let tiles = self.params.tiles();
-        let n_slots = self.views.slots() as u64;
+        let n_slots = self.n_slots as u64;
         let mut out = Vec::new();
         let mut base = 0u64;
         for l in 0..hiz_levels(tiles) {
@@ -430,24 +479,27 @@ impl GpuAds {
 
     /// The id lists read back (offsets and ids; ids in GPU order inside each list).
     pub fn read_lists(&self, gpu: &Gpu) -> Result<IdLists, GpuError> {
-        let n_lists = self.views.slots() as u64
-            * (self.params.tiles() as u64).pow(2)
-            * self.params.buckets as u64;
+        let n_lists =
+            self.n_slots as u64 * (self.params.tiles() as u64).pow(2) * self.params.buckets as u64;
         let offsets = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(
             gpu,
             &self.offsets,
             0,
             (n_lists + 1) * 4,
         )?);
-        let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(
-            gpu,
-            &self.ids,
-            0,
-            self.nodes as u64 * 4,
-        )?);
+        let total = offsets.last().copied().unwrap_or(0) as u64;
+        if total > self.ids.size() / 4 {
+            return Err(GpuError::TooLarge {
+                what: "list ids (the build overflowed them; build again)",
+                bytes: total * 4,
+                limit: self.ids.size(),
+            });
+        }
+        let ids =
+            bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(gpu, &self.ids, 0, total * 4)?);
         Ok(IdLists {
             offsets,
-            ids: ids[..self.nodes as usize].to_vec(),
+            ids: ids[..total as usize].to_vec(),
         })
     }
 }

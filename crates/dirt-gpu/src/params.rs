@@ -70,3 +70,49 @@ pub struct PoolHeader {
     /// Continuation dispatches that had rays to continue.
     pub rounds: u32,
 }
+
+/// `struct ViewsParams` of `views.wgsl`. repr(C), Pod, 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ViewsParams {
+    pub n_tris: u32,
+    /// 0 = cube, 1 = single.
+    pub kind: u32,
+    /// 1: `center` is given ([`dirt_core::AdsParams::center`]).
+    pub has_center: u32,
+    pub _pad0: u32,
+    pub center: [f32; 3],
+    pub _pad1: u32,
+}
+
+/// `struct FrameState` of `views.wgsl`: what the `views` stage reduces.
+/// repr(C), Pod, 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct FrameState {
+    /// `!ordered(min x, y, z)`, `ordered(max x, y, z)` ([`dirt_math::encode`]).
+    pub bounds: [u32; 6],
+    /// `0xffffffff - index` of the first triangle with a non-finite vertex, or 0.
+    pub bad: u32,
+    /// Bit `v`: some triangle reaches a tile of view `v`.
+    pub reach: u32,
+}
+
+/// `struct GatherParams` of `gather.wgsl`: one mesh. repr(C), Pod, 80 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GatherParams {
+    /// Where the mesh's first triangle goes in the structure's triangles.
+    pub first_tri: u32,
+    pub n_tris: u32,
+    /// Vertex stride and position offset in 4-byte words.
+    pub stride: u32,
+    pub offset: u32,
+    /// 0: no indices, 1: u16, 2: u32.
+    pub index_format: u32,
+    pub first_index: u32,
+    pub has_transform: u32,
+    pub _pad: u32,
+    /// [`dirt_core::gather::Affine`], row-major.
+    pub rows: [[f32; 4]; 3],
+}

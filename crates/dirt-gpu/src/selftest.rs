@@ -39,7 +39,7 @@ pub fn run(
         pass.set_bind_group(0, &bind, &[]);
         pass.dispatch_workgroups(cases.div_ceil(64), 1, 1);
     }
-    gpu.queue.submit([enc.finish()]);
+    gpu.submit(enc);
     gpu.wait()?;
     let out =
         bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(gpu, &outb, 0, (out_words * 4) as u64)?);

@@ -35,6 +35,11 @@ const CHUNK: usize = 1 << 18;
 /// its continuation not yet run).
 pub const UNFINISHED: u32 = 0xffff_fffe;
 
+/// The primitive id of every ray traced through a frame structure whose
+/// lists did not fit their ids (see [`crate::frame`]): the structure is
+/// incomplete and the hits unknown; build again and trace again.
+pub const STRUCTURE_FULL: u32 = 0xffff_fffd;
+
 /// Loop iterations a ray may run per dispatch, at most: 7000 × 8 lanes stays
 /// under lavapipe's 65535 iterations per invocation with room for the loops' exits.
 pub const WORK_BUDGET: u32 = 7000;
@@ -269,8 +274,8 @@ impl TraceResources {
         let tiles = ads.params.tiles();
         let params = TraceParams {
             n_rays: count,
-            n_views: ads.views.views.len() as u32,
-            n_slots: ads.views.slots() as u32,
+            n_views: ads.n_views,
+            n_slots: ads.n_slots,
             tiles,
             buckets: ads.params.buckets,
             levels: hiz_levels(tiles),
@@ -458,7 +463,7 @@ impl TraceResources {
                 if let Some(s) = &stat_buf {
                     enc.copy_buffer_to_buffer(s, 0, &staging, HEADER_BYTES + n * 16, n * 16);
                 }
-                gpu.queue.submit([enc.finish()]);
+                gpu.submit(enc);
                 out.submissions += 1;
                 let bytes = map_read(gpu, &staging)?;
                 let head: PoolHeader =

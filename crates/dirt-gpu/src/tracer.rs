@@ -21,7 +21,13 @@ pub struct DirtGpu<'g> {
     pub resources: TraceResources,
     /// Continuation rounds so far.
     pub rounds: u64,
+    /// List entries the ids of a frame structure hold at first
+    /// ([`DirtGpu::encode_build`]; they grow to fit what builds need).
+    pub entries_hint: u64,
 }
+
+/// [`DirtGpu::entries_hint`] by default: 4 MiB of ids.
+pub const ENTRIES_HINT: u64 = 1 << 20;
 
 impl<'g> DirtGpu<'g> {
     /// A tracer that builds with `params` on `gpu`; call [`Tracer::build`] before tracing.
@@ -33,6 +39,7 @@ impl<'g> DirtGpu<'g> {
             ads: None,
             resources: TraceResources::new(gpu),
             rounds: 0,
+            entries_hint: ENTRIES_HINT,
         }
     }
 
@@ -57,6 +64,28 @@ impl<'g> DirtGpu<'g> {
             ads: Some(ads),
             ..Self::new(gpu, AdsParams::default(), traversal)
         }
+    }
+
+    /// Records a build over the application's meshes into `enc`, without
+    /// submitting or waiting (see [`GpuAds::encode_build`]). The first call,
+    /// or one after [`Tracer::build`] or a change of [`DirtGpu::params`],
+    /// makes the frame structure ([`GpuAds::frame`]); later calls reuse its buffers.
+    pub fn encode_build(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        meshes: &[crate::GpuMesh<'_>],
+    ) -> Result<(), GpuError> {
+        let reuse = self
+            .ads
+            .as_ref()
+            .is_some_and(|a| a.feedback().is_some() && a.params == self.params);
+        let ads = match self.ads.as_mut() {
+            Some(ads) if reuse => ads,
+            _ => self
+                .ads
+                .insert(GpuAds::frame(self.gpu, &self.params, self.entries_hint)?),
+        };
+        ads.encode_build(self.gpu, enc, meshes)
     }
 
     /// The structure of the last build.

@@ -173,9 +173,30 @@ impl Aabb {
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
+    /// Grows the box to hold `p`. Of two equal zeros the minimum is `-0.0` and
+    /// the maximum `+0.0` (the order of [`crate::encode`]), so the bounds, and
+    /// every view fitted to them, are the same on the GPU, which reduces them
+    /// with atomic min/max of that encoding. NaN coordinates are ignored.
     pub fn grow(&mut self, p: Vec3) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
+        let lower = |a: f32, b: f32| b < a || (b == a && b.is_sign_negative());
+        let pick_min = |a: f32, b: f32| if lower(a, b) { b } else { a };
+        let pick_max = |a: f32, b: f32| {
+            if b > a || (b == a && a.is_sign_negative()) {
+                b
+            } else {
+                a
+            }
+        };
+        self.min = Vec3::new(
+            pick_min(self.min.x, p.x),
+            pick_min(self.min.y, p.y),
+            pick_min(self.min.z, p.z),
+        );
+        self.max = Vec3::new(
+            pick_max(self.max.x, p.x),
+            pick_max(self.max.y, p.y),
+            pick_max(self.max.z, p.z),
+        );
     }
     pub fn of_triangles(tris: &[Triangle]) -> Aabb {
         let mut b = Aabb::EMPTY;

@@ -321,8 +321,11 @@ impl ViewSet {
         } else {
             Vec3::Y
         };
-        let right = up_hint.cross(forward).normalize();
-        let up = forward.cross(right);
+        // Zeros made positive: a GPU may give either sign to a product with a
+        // zero factor, and the views stage computes these axes there too.
+        let right = positive_zeros(up_hint.cross(forward).normalize());
+        let up = positive_zeros(forward.cross(right));
+        let forward = positive_zeros(forward);
         let v = View::new(
             apex,
             right,
@@ -342,6 +345,12 @@ impl ViewSet {
         set.assign_slots();
         set
     }
+}
+
+/// `v` with `-0.0` components replaced by `+0.0`.
+pub fn positive_zeros(v: Vec3) -> Vec3 {
+    let f = |x: f32| if x == 0.0 { 0.0 } else { x };
+    Vec3::new(f(v.x), f(v.y), f(v.z))
 }
 
 /// Near distance for views centred at `c`: small against the scene, large

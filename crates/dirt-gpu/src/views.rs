@@ -1,0 +1,67 @@
+//! Pass `views` (`views.wgsl`): the view set of `dirt_core::views_for`,
+//! computed on the GPU from the triangles for builds recorded into an
+//! encoder — scene bounds by an atomic reduction (`bounds`), each view fitted
+//! to them (`views_from_bounds`), which views a triangle reaches (`reach`),
+//! and the others left out (`leave_out`). The same views as the CPU's, to the
+//! bit, except that slots are sparse (a view's slot is its index): the host
+//! does not wait to learn which views have content, so every view's block is
+//! allocated.
+
+use crate::fill_primitives::grid;
+use crate::{Gpu, bind_buffers};
+use dirt_math::{Aabb, Vec3, ViewGpu, ViewSet, ViewsKind};
+
+/// The views buffer before the first build: each view's axes, tan, tiles,
+/// step and (for the cube) adjacency, which do not depend on the scene. The
+/// `views` stage fills in the rest every build.
+pub(crate) fn template(kind: ViewsKind, tiles: u32) -> [ViewGpu; 6] {
+    let unit = Aabb {
+        min: Vec3::splat(-1.0),
+        max: Vec3::splat(1.0),
+    };
+    let set = match kind {
+        ViewsKind::Cube => ViewSet::cube(Vec3::ZERO, &unit, tiles),
+        ViewsKind::Single => ViewSet::single(None, &unit, tiles),
+    };
+    crate::views_gpu(&set)
+}
+
+/// Records the four entries over `n_tris` triangles in `tris`: `state` must
+/// be zero (cleared in the same encoder) and `params` written.
+pub(crate) fn record(
+    gpu: &Gpu,
+    enc: &mut wgpu::CommandEncoder,
+    tris: &wgpu::Buffer,
+    views: &wgpu::Buffer,
+    state: &wgpu::Buffer,
+    params: &wgpu::Buffer,
+    n_tris: u32,
+    n_views: u32,
+) {
+    let [bounds, from_bounds, reach, leave_out] = &gpu.pipelines.views;
+    let bind = bind_buffers(
+        gpu,
+        "views",
+        &bounds.get_bind_group_layout(0),
+        &[(0, tris), (1, views), (2, state), (3, params)],
+    );
+    let (x, y) = grid(gpu, (n_tris as u64).div_ceil(64));
+    let steps: [(&wgpu::ComputePipeline, [u32; 3]); 4] = [
+        (bounds, [x, y, 1]),
+        (from_bounds, [1, 1, 1]),
+        (reach, [x, y, n_views]),
+        (leave_out, [1, 1, 1]),
+    ];
+    for (pipeline, [x, y, z]) in steps {
+        if n_tris == 0 && (std::ptr::eq(pipeline, bounds) || std::ptr::eq(pipeline, reach)) {
+            continue;
+        }
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("views"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(x, y, z);
+    }
+}
