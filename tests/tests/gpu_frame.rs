@@ -623,4 +623,68 @@ fn wrong_meshes_and_structures_are_errors() {
         0,
         "nothing was recorded"
     );
+    // More ids than one binding holds: refused by name before any allocation.
+    let e = GpuAds::frame(g, &params, u64::MAX / 8).expect_err("too large");
+    assert!(
+        matches!(
+            e,
+            dirt_gpu::GpuError::TooLarge {
+                what: "list ids",
+                ..
+            }
+        ),
+        "{e}"
+    );
+}
+
+/// A device destroyed in the middle of a frame: dirt's calls return errors
+/// that say the device is lost, nothing panics, and a new `Gpu` traces again.
+#[test]
+fn a_destroyed_device_is_an_error_and_a_new_gpu_works() {
+    let required = std::env::var("DIRT_REQUIRE_GPU").is_ok_and(|v| v == "1");
+    let g = match Gpu::new() {
+        Ok(g) => g,
+        Err(e) if !required => {
+            eprintln!("SKIP a_destroyed_device_is_an_error_and_a_new_gpu_works: {e}");
+            return;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    let tris = dirt_tests::grid(2, 2.0, 0.0);
+    let params = AdsParams {
+        resolution: 16,
+        ..AdsParams::default()
+    };
+    let rays = [Ray::new(
+        Vec3::new(0.1, 0.2, 3.0),
+        -Vec3::Z,
+        0.0,
+        f32::INFINITY,
+    )];
+    let m = app_mesh(&tris, IndexFormat::U32, None);
+    let v = storage(&g, &m.vertices, wgpu::BufferUsages::empty());
+    let i = storage(&g, &m.indices, wgpu::BufferUsages::empty());
+    let mut ads = GpuAds::frame(&g, &params, 1 << 12).expect("frame");
+    let mut enc = g.device.create_command_encoder(&Default::default());
+    let mesh = GpuMesh {
+        vertices: &v,
+        indices: Some(&i),
+        layout: m.layout,
+    };
+    ads.encode_build(&g, &mut enc, &[mesh])
+        .expect("recorded before the loss");
+    g.device.destroy();
+    let mut res = TraceResources::new(&g);
+    let e = res
+        .trace_host(&g, &ads, &rays, Traversal::HiZ, false)
+        .expect_err("no trace on a destroyed device");
+    assert!(matches!(e, dirt_gpu::GpuError::DeviceLost { .. }), "{e:?}");
+    let e = GpuAds::build(&g, &tris, &params).expect_err("no build on a destroyed device");
+    assert!(matches!(e, dirt_gpu::GpuError::DeviceLost { .. }), "{e:?}");
+    drop((ads, res, enc));
+
+    let fresh = Gpu::new().expect("a new Gpu after the loss");
+    let ads = GpuAds::build(&fresh, &tris, &params).expect("build");
+    let (hits, _) = dirt_gpu::trace::trace(&fresh, &ads, &rays, Traversal::HiZ).expect("trace");
+    assert!(hits[0].is_hit());
 }

@@ -48,6 +48,8 @@ pub struct Gpu {
     /// Submissions and host waits dirt made itself (see [`Gpu::host_syncs`]).
     submits: std::sync::atomic::AtomicU64,
     waits: std::sync::atomic::AtomicU64,
+    /// Set by the device-lost callback of a device dirt opened itself.
+    lost: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 /// What dirt itself submitted and waited for on a [`Gpu`] so far.
@@ -125,7 +127,14 @@ impl Gpu {
     /// [`Gpu::new`] with options.
     pub fn with_options(options: &GpuOptions) -> Result<Gpu, GpuError> {
         let (device, queue) = pollster::block_on(Self::open_device())?;
-        Self::from_device(&device, &queue, options)
+        let gpu = Self::from_device(&device, &queue, options)?;
+        // dirt's own device: its loss is dirt's to hear of (an application's
+        // device keeps the application's callback).
+        let lost = gpu.lost.clone();
+        device.set_device_lost_callback(move |_, _| {
+            lost.store(true, std::sync::atomic::Ordering::Release);
+        });
+        Ok(gpu)
     }
 
     /// A device as dirt would ask for one: passthrough shaders where the
@@ -191,6 +200,7 @@ impl Gpu {
             pipelines,
             submits: Default::default(),
             waits: Default::default(),
+            lost: Default::default(),
         })
     }
 
@@ -215,6 +225,48 @@ impl Gpu {
         HostSyncs {
             submissions: self.submits.load(Relaxed),
             waits: self.waits.load(Relaxed),
+        }
+    }
+
+    /// Runs `f` inside out-of-memory and validation error scopes: what wgpu
+    /// reports there becomes a [`GpuError`] naming `what`, instead of going
+    /// to the device's uncaptured-error handler (which panics by default).
+    /// Popping a scope does not wait for the GPU.
+    pub(crate) fn scoped<T>(
+        &self,
+        what: &'static str,
+        f: impl FnOnce() -> Result<T, GpuError>,
+    ) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        if let Some(e) = o {
+            return Err(GpuError::OutOfMemory {
+                what,
+                message: e.to_string(),
+            });
+        }
+        if let Some(e) = v {
+            return Err(self.classify(what, e.to_string()));
+        }
+        out
+    }
+
+    /// A wgpu error message as a [`GpuError`]: a lost device, or a validation error.
+    pub(crate) fn classify(&self, what: &'static str, message: String) -> GpuError {
+        // A poll runs the device-lost callback if the device is gone.
+        let polled = self.device.poll(wgpu::PollType::Poll);
+        let lower = message.to_lowercase();
+        if polled.is_err()
+            || self.lost.load(std::sync::atomic::Ordering::Acquire)
+            || lower.contains("lost")
+            || lower.contains("destroyed") && lower.contains("device")
+        {
+            GpuError::DeviceLost { what, message }
+        } else {
+            GpuError::Validation { what, message }
         }
     }
 

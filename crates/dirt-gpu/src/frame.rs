@@ -34,7 +34,6 @@ use dirt_math::ViewsKind;
 use dirt_math::dda::{hiz_levels, hiz_width};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
-use wgpu::util::DeviceExt;
 
 /// What the completed builds of a frame structure said (see [`GpuAds::feedback`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -107,6 +106,16 @@ impl GpuAds {
     /// says how many; the ids for `entries_hint` list entries at first (a
     /// guess: a build that needs more overflows once, and the ids grow).
     pub fn frame(gpu: &Gpu, params: &AdsParams, entries_hint: u64) -> Result<GpuAds, GpuError> {
+        gpu.scoped("making a frame structure", || {
+            Self::frame_unscoped(gpu, params, entries_hint)
+        })
+    }
+
+    fn frame_unscoped(
+        gpu: &Gpu,
+        params: &AdsParams,
+        entries_hint: u64,
+    ) -> Result<GpuAds, GpuError> {
         params.validate()?;
         let tiles = params.tiles();
         let n_views: u32 = match params.views {
@@ -123,13 +132,12 @@ impl GpuAds {
         crate::check_binding(gpu, "list ids", capacity * 4)?;
 
         let template = crate::views::template(params.views, tiles);
-        let views_uniform = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("views"),
-                contents: bytemuck::cast_slice(&template),
-                usage: wgpu::BufferUsages::UNIFORM | STORAGE | COPY_SRC,
-            });
+        let views_uniform = crate::buffer_init(
+            gpu,
+            "views",
+            bytemuck::cast_slice(&template),
+            wgpu::BufferUsages::UNIFORM | STORAGE | COPY_SRC,
+        );
         let hiz = buffer(gpu, "hi-z", cells * 8, STORAGE | COPY_SRC);
         let offsets = buffer(
             gpu,
@@ -211,6 +219,17 @@ impl GpuAds {
     /// made by [`GpuAds::build`], a mesh whose buffers or layout are wrong,
     /// or buffers the device cannot bind.
     pub fn encode_build(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        meshes: &[GpuMesh<'_>],
+    ) -> Result<(), GpuError> {
+        gpu.scoped("encode_build", || {
+            self.encode_build_unscoped(gpu, enc, meshes)
+        })
+    }
+
+    fn encode_build_unscoped(
         &mut self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,

@@ -46,7 +46,6 @@ use dirt_core::{AdsParams, BuildTimings, CoreError, IdLists};
 use dirt_math::dda::{hiz_levels, hiz_width};
 use dirt_math::{Triangle, ViewGpu, ViewSet};
 use std::time::Instant;
-use wgpu::util::DeviceExt;
 
 /// Errors of the GPU backend.
 #[derive(Debug, thiserror::Error)]
@@ -80,6 +79,15 @@ pub enum GpuError {
     },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
+    /// wgpu refused an allocation of the named step for lack of memory.
+    #[error("{what}: out of GPU memory ({message})")]
+    OutOfMemory { what: &'static str, message: String },
+    /// wgpu reported a validation error in the named step.
+    #[error("{what}: {message}")]
+    Validation { what: &'static str, message: String },
+    /// The device is lost (destroyed, reset or removed): make a new device and a new [`Gpu`].
+    #[error("{what}: the GPU device is lost ({message}); make a new device and Gpu")]
+    DeviceLost { what: &'static str, message: String },
 }
 
 /// Compiled pipelines, made once per device.
@@ -275,21 +283,37 @@ pub(crate) fn storage_init(
     if bytes.len() < 16 {
         bytes.resize(16, 0);
     }
-    gpu.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &bytes,
-            usage: wgpu::BufferUsages::STORAGE | extra,
-        })
+    buffer_init(gpu, label, &bytes, wgpu::BufferUsages::STORAGE | extra)
 }
 
 pub(crate) fn uniform_init(gpu: &Gpu, label: &str, data: &[u8]) -> wgpu::Buffer {
-    gpu.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: data,
-            usage: wgpu::BufferUsages::UNIFORM,
-        })
+    buffer_init(gpu, label, data, wgpu::BufferUsages::UNIFORM)
+}
+
+/// A buffer holding `data`, written through the queue (it also gets
+/// `COPY_DST`). Not wgpu's `create_buffer_init`: that panics when the device
+/// is lost, where this leaves an error for [`Gpu::scoped`] to report.
+pub(crate) fn buffer_init(
+    gpu: &Gpu,
+    label: &str,
+    data: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let size = (data.len() as u64).max(4).div_ceil(4) * 4;
+    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: usage | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    if data.len() as u64 == size {
+        gpu.queue.write_buffer(&buf, 0, data);
+    } else {
+        let mut padded = data.to_vec();
+        padded.resize(size as usize, 0);
+        gpu.queue.write_buffer(&buf, 0, &padded);
+    }
+    buf
 }
 
 /// A bind group of whole buffers for group 0 of `layout`: `(binding, buffer)` pairs.
@@ -365,8 +389,19 @@ pub(crate) fn views_gpu(views: &ViewSet) -> [ViewGpu; 6] {
 }
 
 impl GpuAds {
-    /// Builds the structure on the GPU: `fill_depth`, `mip_depth`, `fill_primitives`.
+    /// Builds the structure on the GPU: `fill_depth`, `mip_depth`,
+    /// `fill_primitives`, each submitted and waited for (the host path; see
+    /// [`GpuAds::frame`] for builds recorded into a frame). wgpu's errors come
+    /// back as [`GpuError`]s, a lost device as [`GpuError::DeviceLost`].
     pub fn build(gpu: &Gpu, tris: &[Triangle], params: &AdsParams) -> Result<GpuAds, GpuError> {
+        gpu.scoped("the GPU build", || Self::build_unscoped(gpu, tris, params))
+    }
+
+    fn build_unscoped(
+        gpu: &Gpu,
+        tris: &[Triangle],
+        params: &AdsParams,
+    ) -> Result<GpuAds, GpuError> {
         let views = dirt_core::views_for(tris, params)?;
         let tiles = params.tiles();
         let n_views = views.views.len() as u32;

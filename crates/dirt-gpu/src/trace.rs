@@ -26,7 +26,6 @@ use dirt_core::Traversal;
 use dirt_math::dda::hiz_levels;
 use dirt_math::{Hit, Ray, RayStats};
 use std::collections::HashMap;
-use wgpu::util::DeviceExt;
 
 /// Rays per submission of the host-slice wrapper: keeps each submission short.
 const CHUNK: usize = 1 << 18;
@@ -243,6 +242,23 @@ impl TraceResources {
         count: u32,
         traversal: Traversal,
     ) -> Result<(), GpuError> {
+        gpu.scoped("encode_trace", || {
+            self.encode_trace_unscoped(gpu, enc, ads, rays, hits, stats, count, traversal)
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn encode_trace_unscoped(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        ads: &GpuAds,
+        rays: &wgpu::Buffer,
+        hits: &wgpu::Buffer,
+        stats: Option<&wgpu::Buffer>,
+        count: u32,
+        traversal: Traversal,
+    ) -> Result<(), GpuError> {
         let n = count as u64;
         check_buffer("the ray buffer", rays, n * 32, wgpu::BufferUsages::STORAGE)?;
         check_buffer("the hit buffer", hits, n * 16, wgpu::BufferUsages::STORAGE)?;
@@ -292,12 +308,7 @@ impl TraceResources {
             .params
             .entry(params)
             .or_insert_with(|| {
-                gpu.device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("trace params"),
-                        contents: bytemuck::bytes_of(&params),
-                        usage: wgpu::BufferUsages::UNIFORM,
-                    })
+                crate::uniform_init(gpu, "trace params", bytemuck::bytes_of(&params))
             })
             .clone();
         let stats_buf = stats.unwrap_or(&self.no_stats);
@@ -409,6 +420,19 @@ impl TraceResources {
     /// reads the hits (and statistics) back; records more rounds while rays
     /// are unfinished.
     pub fn trace_host(
+        &mut self,
+        gpu: &Gpu,
+        ads: &GpuAds,
+        rays: &[Ray],
+        traversal: Traversal,
+        with_stats: bool,
+    ) -> Result<Traced, GpuError> {
+        gpu.scoped("the trace", || {
+            self.trace_host_unscoped(gpu, ads, rays, traversal, with_stats)
+        })
+    }
+
+    fn trace_host_unscoped(
         &mut self,
         gpu: &Gpu,
         ads: &GpuAds,
