@@ -139,6 +139,18 @@ fn record_frame(
         "recording a frame must neither submit nor wait"
     );
     g.queue.submit([enc.finish()]);
+    // Rays still unfinished after the recorded rounds: the application records more.
+    loop {
+        let pool = res.pool().expect("a trace was recorded");
+        let head: dirt_gpu::PoolHeader =
+            bytemuck::pod_read_unaligned(&read_buffer(&g.device, &g.queue, pool)[..16]);
+        if head.count_in == 0 {
+            break;
+        }
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        res.encode_continue(g, &mut enc).expect("encode_continue");
+        g.queue.submit([enc.finish()]);
+    }
     let hits = bytemuck::pod_collect_to_vec::<u8, Hit>(&read_buffer(&g.device, &g.queue, &hit_buf));
     let stats =
         bytemuck::pod_collect_to_vec::<u8, RayStats>(&read_buffer(&g.device, &g.queue, &stat_buf));
@@ -242,6 +254,7 @@ fn check_frame(
     format: IndexFormat,
     params: &AdsParams,
     seed: u64,
+    budget: u32,
 ) -> Result<(), TestCaseError> {
     let Some(g) = exact_gpu(&current_test_name()) else {
         return Ok(());
@@ -256,6 +269,8 @@ fn check_frame(
     // Room enough: this test is about the structure, not the ids' growth.
     let mut ads = GpuAds::frame(g, params, cpu.lists.ids.len() as u64 + 1).expect("frame");
     let mut res = TraceResources::new(g);
+    // The default budget, or one that stops rays mid-walk, many times.
+    res.budget = budget;
     let rays = adversarial_rays(&cpu_tris, 6, seed);
     for trav in [Traversal::Linear, Traversal::HiZ] {
         let f = record_frame(g, &mut ads, &mut res, &[(&v, &i, mesh.layout)], &rays, trav);
@@ -321,6 +336,7 @@ proptest! {
         params in params_strategy(),
         u16_indices in prop::bool::ANY,
         transformed in prop::bool::ANY,
+        budget in prop::sample::select(vec![dirt_gpu::trace::WORK_BUDGET, 40]),
     ) {
         let tris = random_scene(seed, n, scale);
         let transform = transformed.then_some([
@@ -329,7 +345,7 @@ proptest! {
             [0.0, 0.0, 1.5, 0.125],
         ]);
         let format = if u16_indices { IndexFormat::U16 } else { IndexFormat::U32 };
-        check_frame(&tris, transform, format, &params, seed)?;
+        check_frame(&tris, transform, format, &params, seed, budget)?;
     }
 }
 
@@ -345,7 +361,8 @@ fn builtin_scenes_built_in_a_frame_equal_the_cpu() {
                 tile: 1,
                 center: None,
             };
-            check_frame(&scene.triangles, None, IndexFormat::U32, &params, 3).expect("gpu == cpu");
+            check_frame(&scene.triangles, None, IndexFormat::U32, &params, 3, 100)
+                .expect("gpu == cpu");
         }
     }
 }

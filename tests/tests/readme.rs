@@ -37,26 +37,38 @@ fn the_readme_example_runs() {
     cpu_example().expect("README example");
 }
 
-/// The README's embedding example: an application's device, queue, buffers and encoder.
+/// The README's embedding example: an application's device, queue, vertex,
+/// index, ray and hit buffers and encoder.
+#[allow(clippy::too_many_arguments)]
 fn gpu_example(
     device: &dirt_gpu::wgpu::Device,
     queue: &dirt_gpu::wgpu::Queue,
+    vertex_buffer: &dirt_gpu::wgpu::Buffer,
+    index_buffer: &dirt_gpu::wgpu::Buffer,
+    triangle_count: u32,
     ray_buffer: &dirt_gpu::wgpu::Buffer,
     hit_buffer: &dirt_gpu::wgpu::Buffer,
     rays: &[dirt_math::Ray],
 ) -> Result<(), Box<dyn Error>> {
-    use dirt_core::{Tracer, Traversal};
-    let scene = dirt_scene::open("cornell")?;
+    use dirt_core::Traversal;
     let count = rays.len() as u32; // rays in ray_buffer
     // README GPU BEGIN
-    use dirt_gpu::{DirtGpu, Gpu, GpuOptions, wgpu}; // dirt's wgpu: the same version as yours
+    use dirt_core::gather::{IndexFormat, MeshLayout};
+    use dirt_gpu::{DirtGpu, Gpu, GpuMesh, GpuOptions, wgpu}; // dirt's wgpu: the same version as yours
     let gpu = Gpu::from_device(device, queue, &GpuOptions::default())?;
     let mut dirt = DirtGpu::new(&gpu, dirt_core::AdsParams::default(), Traversal::HiZ);
-    dirt.build(&scene.triangles)?;
+    // Each frame: the application's own buffers, with STORAGE usage. Here 12-byte vertices
+    // (the position at byte 0) and u32 indices; any stride, offset, u16 and a transform work.
+    let mesh = GpuMesh {
+        vertices: vertex_buffer,
+        indices: Some(index_buffer),
+        layout: MeshLayout::indexed(12, 0, IndexFormat::U32, triangle_count),
+    };
     // rays: STORAGE, 32 bytes a ray (dirt_math::Ray); hits: STORAGE, 16 bytes a hit (dirt_math::Hit)
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    dirt.encode_build(&mut encoder, &[mesh])?; // the structure, built from those buffers
     dirt.encode_trace(&mut encoder, ray_buffer, hit_buffer, None, count)?;
-    queue.submit([encoder.finish()]); // the trace runs from here
+    queue.submit([encoder.finish()]); // build and trace run from here; dirt never waits
     // README GPU END
     Ok(())
 }
@@ -74,23 +86,45 @@ fn the_readme_gpu_example_runs() {
         0.0,
         f32::INFINITY,
     )];
-    let ray_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::cast_slice(&rays),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    let init = |contents: &[u8], usage| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents,
+            usage,
+        })
+    };
+    let vertex_buffer = init(
+        bytemuck::cast_slice(&scene.triangles),
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
+    );
+    let indices: Vec<u32> = (0..scene.triangles.len() as u32 * 3).collect();
+    let index_buffer = init(
+        bytemuck::cast_slice(&indices),
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX,
+    );
+    let ray_buffer = init(bytemuck::cast_slice(&rays), wgpu::BufferUsages::STORAGE);
     let hit_buffer = device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
         size: 16,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    gpu_example(&device, &queue, &ray_buffer, &hit_buffer, &rays).expect("README GPU example");
+    gpu_example(
+        &device,
+        &queue,
+        &vertex_buffer,
+        &index_buffer,
+        scene.triangles.len() as u32,
+        &ray_buffer,
+        &hit_buffer,
+        &rays,
+    )
+    .expect("README GPU example");
     let hit: dirt_math::Hit =
         bytemuck::pod_read_unaligned(&dirt_tests::read_buffer(&device, &queue, &hit_buffer));
-    let scene = dirt_scene::open("cornell").expect("cornell");
     let truth = dirt_cpu::brute_force::trace(&scene.triangles, &rays);
-    assert!(hit.is_hit());
+    assert!(hit.is_hit(), "{hit:?}");
     assert_eq!(hit.bits(), truth[0].bits());
 }
 

@@ -1,14 +1,33 @@
-//! dirt-gpu: DIRT on wgpu, one pass per stage, mirroring `dirt-cpu` one to one:
+//! dirt-gpu: DIRT on wgpu, one pass per stage, mirroring `dirt-cpu` one to one.
+//!
+//! Entry points:
+//! - [`Gpu::from_device`] (the application's device and queue) or [`Gpu::new`];
+//! - [`DirtGpu`], the [`dirt_core::Tracer`]: `build(&triangles)` and `trace(&rays)` from host
+//!   slices, or [`DirtGpu::encode_build`] and [`DirtGpu::encode_trace`] recorded into the
+//!   application's encoder;
+//! - underneath, [`GpuAds::build`] (host triangles, each stage waited for), [`GpuAds::frame`]
+//!   with [`GpuAds::encode_build`] (the application's [`GpuMesh`]es; see [`frame`] for list
+//!   storage, feedback and synchronisation), and [`TraceResources`] (see [`trace`] for the
+//!   ray, hit and statistics layouts, byte for byte, and continuation).
+//!
+//! Ownership: a [`GpuAds`] and a [`TraceResources`] own their buffers and keep them between
+//! frames; the caller owns meshes, rays, hits and statistics buffers. Nothing here submits or
+//! waits except the host-slice wrappers ([`Gpu::host_syncs`] counts them).
 //!
 //! | stage | pass | WGSL |
 //! |---|---|---|
-//! | `fill_depth` | raster: `cover_vs` + `fill_depth` | `fill_depth.wgsl` (+ `coverage.wgsl`) |
+//! | `gather` | compute (frames only) | `gather.wgsl` |
+//! | `views` | compute `bounds`, `views_from_bounds`, `reach`, `leave_out` (frames only) | `views.wgsl` |
+//! | `fill_depth` | raster: `cover_vs` + `fill_depth` (+ compute `clear_depth` in frames) | `fill_depth.wgsl` (+ `coverage.wgsl`) |
 //! | `mip_depth` | compute, one dispatch per level | `mip_depth.wgsl` |
 //! | `fill_primitives` | raster `count`, compute `scan_blocks`/`scan_add`, raster `fill` | `fill_primitives.wgsl` |
 //! | `trace` | compute, one thread per ray | `trace.wgsl` |
 //!
 //! On lavapipe (the CI device) every output equals the CPU reference's to the
-//! bit: depth bounds, Hi-Z levels, list contents (as sets) and hits.
+//! bit: views, depth bounds, Hi-Z levels, list contents (as sets), hits and
+//! statistics. What "exact" means per backend: NoContraction SPIR-V on Vulkan
+//! ([`spirv`], decided by [`exact_path`]); elsewhere the driver compiles the
+//! WGSL and may contract, and no bits are promised or measured.
 //!
 //! Tests in every crate get their GPU from [`testing`]: [`testing::any_gpu`]
 //! for structure, sizes, errors and the absence of panics (any adapter,
