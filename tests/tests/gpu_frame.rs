@@ -705,3 +705,64 @@ fn a_destroyed_device_is_an_error_and_a_new_gpu_works() {
     let (hits, _) = dirt_gpu::trace::trace(&fresh, &ads, &rays, Traversal::HiZ).expect("trace");
     assert!(hits[0].is_hit());
 }
+
+/// `DirtGpu` with `frame_builds`: the host-slice wrapper of a frame build
+/// (one submission, built again when the lists outgrew the ids) traces the
+/// same bits as the host build; non-finite input is the CPU's error.
+#[test]
+fn the_tracer_builds_in_a_frame_with_the_same_hits() {
+    use dirt_core::Tracer;
+    let Some(g) = exact_gpu("the_tracer_builds_in_a_frame_with_the_same_hits") else {
+        return;
+    };
+    let _serial = serial();
+    let tris = dirt_scene::builtin("layers").expect("built-in").triangles;
+    let params = AdsParams {
+        resolution: 32,
+        buckets: 4,
+        ..AdsParams::default()
+    };
+    let rays = adversarial_rays(&tris, 40, 8);
+    let mut host = dirt_gpu::DirtGpu::new(g, params, Traversal::HiZ);
+    host.build(&tris).expect("host build");
+    let mut frame = dirt_gpu::DirtGpu::new(g, params, Traversal::HiZ);
+    frame.frame_builds = true;
+    frame.entries_hint = 16;
+    let before = g.host_syncs();
+    let report = frame.build(&tris).expect("frame build");
+    let syncs = g.host_syncs();
+    assert_eq!(
+        (
+            syncs.submissions - before.submissions,
+            syncs.waits - before.waits
+        ),
+        (2, 2),
+        "the first build overflowed the hinted ids and ran once more"
+    );
+    assert_eq!(report.stages.len(), 1);
+    let fb = frame
+        .ads()
+        .and_then(|a| a.feedback())
+        .expect("a frame structure");
+    assert_eq!((fb.overflows, fb.grown), (1, 1), "{fb:?}");
+    let mut hs = vec![Hit::MISS; rays.len()];
+    let mut ss = vec![RayStats::default(); rays.len()];
+    host.trace_into(&rays, &mut hs, Some(&mut ss))
+        .expect("trace");
+    let mut hf = vec![Hit::MISS; rays.len()];
+    let mut sf = vec![RayStats::default(); rays.len()];
+    frame
+        .trace_into(&rays, &mut hf, Some(&mut sf))
+        .expect("trace");
+    for r in 0..rays.len() {
+        assert_eq!(hf[r].bits(), hs[r].bits(), "ray {r}");
+        assert_eq!(sf[r], ss[r], "ray {r} statistics");
+    }
+    let mut bad = tris.clone();
+    bad[7] = Triangle::new(Vec3::new(0.0, f32::INFINITY, 0.0), Vec3::X, Vec3::Y);
+    let e = frame.build(&bad).expect_err("non-finite");
+    assert!(
+        matches!(e, dirt_core::CoreError::NonFiniteTriangle { index: 7 }),
+        "{e}"
+    );
+}

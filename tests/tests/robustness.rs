@@ -1409,3 +1409,30 @@ fn renderer_on_a_scene_of_only_degenerate_triangles() {
         "not a uniform background"
     );
 }
+
+/// The cost model under a device's binding limit: it chooses a candidate
+/// whose every GPU binding fits, and says so by name when none does.
+#[test]
+fn the_cost_model_chooses_within_a_devices_binding_limit() {
+    use dirt_cpu::cost;
+    let tris = dirt_scene::builtin("cornell").expect("built-in").triangles;
+    let sample = cost::sample_rays(&tris, 256, 1);
+    let cands = cost::candidates(&dirt_core::AdsParams::default(), true);
+    let model = &cost::CostModel::CALIBRATED;
+    let trav = dirt_core::Traversal::HiZ;
+    let free = cost::auto(&tris, &sample, 1 << 20, trav, model, &cands).expect("a choice");
+    let limit = free.best.largest_binding / 2;
+    let within = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, Some(limit))
+        .expect("a choice within the limit");
+    assert!(
+        within.best.largest_binding <= limit,
+        "{} > {limit}",
+        within.best.largest_binding
+    );
+    assert!(within.too_large > 0);
+    let e = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, Some(64))
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(e.contains("binding of 64 bytes"), "{e}");
+}

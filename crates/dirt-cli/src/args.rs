@@ -108,6 +108,19 @@ impl AdsArgs {
         rays_per_frame: u64,
         sample: Option<&[Ray]>,
     ) -> Result<(AdsParams, Option<dirt_cpu::Ads>)> {
+        self.choose_within(scene, rays_per_frame, sample, None)
+    }
+
+    /// [`AdsArgs::choose`] for a device that binds at most `max_binding`
+    /// bytes in one buffer: the cost model chooses among the candidates that
+    /// fit (`dirt_cpu::cost::auto_within`).
+    pub fn choose_within(
+        &self,
+        scene: &Scene,
+        rays_per_frame: u64,
+        sample: Option<&[Ray]>,
+        max_binding: Option<u64>,
+    ) -> Result<(AdsParams, Option<dirt_cpu::Ads>)> {
         let base = self.params();
         let g = self.given;
         if self.fixed || (g.views && g.resolution && g.buckets) {
@@ -139,15 +152,23 @@ impl AdsArgs {
             _ => rays::generate(&scene.triangles, None, RayKind::Mixed, AUTO_SAMPLE, 1)
                 .context("cost model: cannot make the ray sample")?,
         };
-        let mut choice = dirt_cpu::cost::auto(
+        let mut choice = dirt_cpu::cost::auto_within(
             &scene.triangles,
             &sample,
             rays_per_frame,
             Traversal::HiZ,
             &dirt_cpu::cost::CostModel::CALIBRATED,
             &uniq,
+            max_binding,
         )
         .context("cost model: cannot build the candidates")?;
+        if choice.too_large > 0 {
+            eprintln!(
+                "ads: {} candidates need more than one binding of the GPU holds ({} bytes) and were not chosen",
+                choice.too_large,
+                max_binding.unwrap_or(0)
+            );
+        }
         let best = choice.best.params;
         eprintln!(
             "ads: {} views, resolution {}, B {}, S {}: the cost model's cheapest predicted frame of {rays_per_frame} rays ({} of {} candidates built, {} pruned; choosing took {:.1} ms; --fixed for cube 128 B8 S1)",

@@ -216,6 +216,10 @@ pub struct Candidate {
     pub frame_ms: f64,
     /// Bytes of the structure.
     pub bytes: u64,
+    /// Bytes of the largest buffer the GPU binds for it (triangles, the Hi-Z
+    /// pyramid, list offsets or list ids): what a device's
+    /// `max_storage_buffer_binding_size` must hold.
+    pub largest_binding: u64,
 }
 
 impl Candidate {
@@ -237,6 +241,15 @@ impl Candidate {
             ray_ns: model.ray_ns(&counts),
             frame_ms: model.frame_ms(&counts, rays_per_frame),
             bytes: ads.memory().total(),
+            largest_binding: [
+                tris.len() as u64 * 36,
+                ads.hiz.iter().map(|l| l.len() as u64 * 8).sum(),
+                ads.lists.offsets.len() as u64 * 4,
+                ads.lists.ids.len() as u64 * 4,
+            ]
+            .into_iter()
+            .max()
+            .unwrap_or(0),
         }
     }
 }
@@ -392,6 +405,8 @@ pub struct AutoChoice {
     /// Candidates left unbuilt: not next to the path the search took, pruned
     /// by an estimate of their frame, or past the budget.
     pub skipped: usize,
+    /// Candidates built but too large for the device ([`auto_within`]).
+    pub too_large: usize,
     /// Predicted milliseconds of the candidate builds and sample traces the
     /// choice made: the price of choosing, which [`auto`] keeps near a share of the frame.
     pub spent_ms: f64,
@@ -448,6 +463,33 @@ pub fn auto(
     model: &CostModel,
     candidates: &[AdsParams],
 ) -> Result<AutoChoice, CpuError> {
+    auto_within(
+        tris,
+        sample,
+        rays_per_frame,
+        traversal,
+        model,
+        candidates,
+        None,
+    )
+}
+
+/// [`auto`] for a device that binds at most `max_binding` bytes in one
+/// buffer (a GPU's `max_storage_buffer_binding_size`): a candidate whose
+/// largest binding ([`Candidate::largest_binding`]) exceeds it is built and
+/// measured but never chosen, and when the first guesses all exceed it the
+/// smaller candidates are tried, smallest first. An error when none fits.
+pub fn auto_within(
+    tris: &[Triangle],
+    sample: &[Ray],
+    rays_per_frame: u64,
+    traversal: Traversal,
+    model: &CostModel,
+    candidates: &[AdsParams],
+    max_binding: Option<u64>,
+) -> Result<AutoChoice, CpuError> {
+    let fits = |c: &Candidate| max_binding.is_none_or(|m| c.largest_binding <= m);
+    let mut too_large: usize = 0;
     let mut ranked: Vec<Candidate> = Vec::new();
     let mut best_ads: Option<Ads> = None;
     let mut tried = vec![false; candidates.len()];
@@ -481,7 +523,8 @@ pub fn auto(
                    tried: &mut [bool],
                    ranked: &mut Vec<Candidate>,
                    best_ads: &mut Option<Ads>,
-                   spent_ms: &mut f64|
+                   spent_ms: &mut f64,
+                   too_large: &mut usize|
      -> Result<bool, CpuError> {
         tried[k] = true;
         let p = &candidates[k];
@@ -497,6 +540,10 @@ pub fn auto(
         let ads = Ads::build(tris, p)?;
         let c = Candidate::of(&ads, tris, sample, traversal, model, rays_per_frame);
         *spent_ms += c.build_ms + c.ray_ns * sample.len() as f64 * 1e-6;
+        if !fits(&c) {
+            *too_large += 1;
+            return Ok(false);
+        }
         let wins = c.frame_ms < best;
         if wins {
             *best_ads = Some(ads);
@@ -526,7 +573,34 @@ pub fn auto(
     guesses
         .sort_by(|&a, &b| estimate(&candidates[a], &[]).total_cmp(&estimate(&candidates[b], &[])));
     for &k in &guesses {
-        attempt(k, &mut tried, &mut ranked, &mut best_ads, &mut spent_ms)?;
+        attempt(
+            k,
+            &mut tried,
+            &mut ranked,
+            &mut best_ads,
+            &mut spent_ms,
+            &mut too_large,
+        )?;
+    }
+    // Every guess too large for the device: the smaller candidates, smallest first, until one fits.
+    if ranked.is_empty() {
+        let mut order: Vec<usize> = (0..candidates.len()).filter(|&k| !tried[k]).collect();
+        order.sort_by_key(|&k| {
+            let p = &candidates[k];
+            (res(p) as u64 * res(p) as u64 * p.buckets as u64, p.buckets)
+        });
+        for k in order {
+            if attempt(
+                k,
+                &mut tried,
+                &mut ranked,
+                &mut best_ads,
+                &mut spent_ms,
+                &mut too_large,
+            )? {
+                break;
+            }
+        }
     }
     // 2. Walk downhill through the neighbours of the best.
     while let Some(at) = ranked.first().map(|c| c.params) {
@@ -546,20 +620,31 @@ pub fn auto(
         });
         let mut moved = false;
         for k in next {
-            moved |= attempt(k, &mut tried, &mut ranked, &mut best_ads, &mut spent_ms)?;
+            moved |= attempt(
+                k,
+                &mut tried,
+                &mut ranked,
+                &mut best_ads,
+                &mut spent_ms,
+                &mut too_large,
+            )?;
         }
         if !moved {
             break;
         }
     }
-    let best = *ranked
-        .first()
-        .ok_or(CpuError::Core(dirt_core::CoreError::InvalidParams(
-            "the cost model was given no candidates".into(),
-        )))?;
+    let best = *ranked.first().ok_or_else(|| {
+        CpuError::Core(dirt_core::CoreError::InvalidParams(match max_binding {
+            Some(m) if too_large > 0 => format!(
+                "none of the {too_large} candidates built fits one binding of {m} bytes (the device's max_storage_buffer_binding_size); the CPU backend traces this scene"
+            ),
+            _ => "the cost model was given no candidates".into(),
+        }))
+    })?;
     Ok(AutoChoice {
         best,
-        skipped: candidates.len() - ranked.len(),
+        too_large,
+        skipped: candidates.len() - ranked.len() - too_large,
         ranked,
         spent_ms,
         best_ads,

@@ -303,7 +303,11 @@ impl Structure {
     /// What the GPU structure says.
     pub fn of_gpu(ads: &dirt_gpu::GpuAds) -> Structure {
         Structure {
-            nodes: Some(u64::from(ads.nodes)),
+            // A frame structure counts its list entries on the GPU: the feedback has them.
+            nodes: Some(
+                ads.feedback()
+                    .map_or(u64::from(ads.nodes), |f| f.entries_needed),
+            ),
             ..Structure::default()
         }
     }

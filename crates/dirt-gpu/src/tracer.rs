@@ -24,6 +24,12 @@ pub struct DirtGpu<'g> {
     /// List entries the ids of a frame structure hold at first
     /// ([`DirtGpu::encode_build`]; they grow to fit what builds need).
     pub entries_hint: u64,
+    /// [`Tracer::build`] uploads the triangles and records a frame build
+    /// ([`DirtGpu::encode_build`]: views on the GPU, one submission, a build
+    /// recorded again if its lists outgrew the ids) instead of
+    /// [`GpuAds::build`] (views on the host, each stage waited for, the list
+    /// total read back). Both give the same hits.
+    pub frame_builds: bool,
 }
 
 /// [`DirtGpu::entries_hint`] by default: 4 MiB of ids.
@@ -40,6 +46,7 @@ impl<'g> DirtGpu<'g> {
             resources: TraceResources::new(gpu),
             rounds: 0,
             entries_hint: ENTRIES_HINT,
+            frame_builds: false,
         }
     }
 
@@ -88,6 +95,56 @@ impl<'g> DirtGpu<'g> {
         ads.encode_build(self.gpu, enc, meshes)
     }
 
+    /// [`Tracer::build`] with [`DirtGpu::frame_builds`]: the host-slice
+    /// wrapper of a frame build. Its one stage, `frame`, is the wall time of
+    /// every submission it took (two when the lists outgrew the ids).
+    fn build_in_frame(&mut self, tris: &[Triangle]) -> Result<BuildReport, GpuError> {
+        let n = u32::try_from(tris.len()).map_err(|_| {
+            GpuError::Params(CoreError::InvalidParams(format!(
+                "{} triangles is more than 2^32-1",
+                tris.len()
+            )))
+        })?;
+        let gpu = self.gpu;
+        let upload = crate::buffer_init(
+            gpu,
+            "triangles upload",
+            bytemuck::cast_slice(tris),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let mesh = crate::GpuMesh {
+            vertices: &upload,
+            indices: None,
+            layout: dirt_core::gather::MeshLayout::triangles(n),
+        };
+        let t0 = std::time::Instant::now();
+        // A build whose lists outgrew the ids grows them for the next: at most one more.
+        for _ in 0..3 {
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            self.encode_build(&mut enc, &[mesh])?;
+            gpu.submit(enc);
+            gpu.wait()?;
+            let Some(ads) = self.ads.as_ref() else { break };
+            let Some(fb) = ads.feedback() else { break };
+            if let Some(index) = fb.non_finite {
+                self.ads = None;
+                return Err(GpuError::Params(CoreError::NonFiniteTriangle {
+                    index: index as usize,
+                }));
+            }
+            if fb.entries_needed <= fb.capacity {
+                let memory = Some(ads.memory_bytes());
+                return Ok(BuildReport {
+                    stages: vec![("frame", t0.elapsed())],
+                    memory,
+                });
+            }
+        }
+        Err(GpuError::Device(
+            "a frame build's lists did not fit after growing its ids".into(),
+        ))
+    }
+
     /// The structure of the last build.
     pub fn ads(&self) -> Option<&GpuAds> {
         self.ads.as_ref()
@@ -120,6 +177,9 @@ impl Tracer for DirtGpu<'_> {
     }
 
     fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
+        if self.frame_builds {
+            return self.build_in_frame(tris).map_err(CoreError::from);
+        }
         self.ads = None;
         let ads = GpuAds::build(self.gpu, tris, &self.params).map_err(CoreError::from)?;
         let report = BuildReport {

@@ -242,8 +242,8 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
                 let exact = gpu.exact;
                 let subject = bench.subject(Backend::Gpu, setting);
                 match bench_gpu(&gpu, &bench, &subject, &cpu_results) {
-                    Ok((build, gpu_rows)) => {
-                        builds.push(build);
+                    Ok((gpu_builds, gpu_rows)) => {
+                        builds.extend(gpu_builds);
                         rows.extend(gpu_rows);
                         GpuState::Used { adapter, exact }
                     }
@@ -312,18 +312,42 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// Builds and traces on the GPU; rows for both traversals, compared with the cpu's.
+/// Builds and traces on the GPU; rows for both traversals, compared with the
+/// cpu's. Two build rows: `gpu`, the host build (views on the host, each
+/// stage waited for), and `gpu-frame`, the build recorded into one
+/// submission (`DirtGpu::frame_builds`), whose hits are checked too.
 fn bench_gpu(
     gpu: &Gpu,
     bench: &Bench<'_>,
     subject: &Subject,
     cpu_results: &[Option<TraceMeasure>],
-) -> Result<(BuildRow, Vec<Row>)> {
+) -> Result<(Vec<BuildRow>, Vec<Row>)> {
     let k = bench.repeat;
+    let mut framed = DirtGpu::new(gpu, bench.params, Traversal::Linear);
+    framed.frame_builds = true;
+    let frame_subject = Subject {
+        backend: "gpu-frame".into(),
+        ..subject.clone()
+    };
+    // The first frame build sizes the ids from its count (once, untimed), as a frame loop would.
+    framed
+        .build(bench.tris)
+        .context("cannot build in a frame")?;
+    let frame_built = bench.build(&mut framed, &frame_subject)?;
+    let frame_structure = framed.ads().map(Structure::of_gpu).unwrap_or_default();
+    let m = measure::trace(&mut framed, bench.rays, 1, StatsPass::Timed)
+        .context("cannot trace the frame build")?;
+    if let Some(Some(c)) = cpu_results.first() {
+        report_differences(Traversal::Linear, bench.tris, bench.rays, &m.hits, &c.hits);
+    }
+    drop(framed);
     let mut tracer = DirtGpu::new(gpu, bench.params, Traversal::Linear);
     let built = bench.build(&mut tracer, subject)?;
     let structure = tracer.ads().map(Structure::of_gpu).unwrap_or_default();
-    let build = BuildRow::new(subject, &built, &structure);
+    let build = vec![
+        BuildRow::new(subject, &built, &structure),
+        BuildRow::new(&frame_subject, &frame_built, &frame_structure),
+    ];
     let mut rows = Vec::new();
     for (cpu, traversal) in cpu_results.iter().zip(Traversal::ALL) {
         eprintln!("gpu: trace {traversal} x {k}");

@@ -140,7 +140,13 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     let (params, chosen) = match args.backend {
         TraceBackend::Brute | TraceBackend::Obvhs | TraceBackend::Embree => (None, None),
         _ => {
-            let (p, ads) = args.ads.choose(&scene, rays.len() as u64, Some(&rays))?;
+            // On the GPU the choice must fit the device's bindings.
+            let max_binding = gpu
+                .as_ref()
+                .map(|g| g.limits.max_storage_buffer_binding_size);
+            let (p, ads) =
+                args.ads
+                    .choose_within(&scene, rays.len() as u64, Some(&rays), max_binding)?;
             (Some(p), ads)
         }
     };
