@@ -298,7 +298,7 @@ pub fn run(opts: &Options) -> Result<Run, Box<dyn Error>> {
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let mut ads = GpuAds::frame(&gpu, &opts.params, 1 << 16)?;
+    let mut ads = GpuAds::frame(&gpu, &opts.params, 1 << 20)?;
     let mut trace = TraceResources::new(&gpu);
     if let Some(dir) = &opts.out {
         std::fs::create_dir_all(dir)?;
