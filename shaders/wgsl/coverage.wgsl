@@ -23,6 +23,10 @@ struct CoverOut {
     @builtin(position) pos: vec4<f32>,
     @location(0) @interpolate(flat) prim: u32,
     @location(1) @interpolate(flat) view: u32,
+    // 1: every vertex lies in every half-space of the view, so clipping
+    // keeps the triangle as it is (Sutherland-Hodgman keeps inside vertices,
+    // in order) and the fragments skip it: the same polygon, to the bit.
+    @location(2) @interpolate(flat) inside: u32,
 }
 
 fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
@@ -33,6 +37,25 @@ fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
 // The triangle in view space, clipped to the view.
 fn view_polygon(v: View, prim: u32) -> Polygon {
     return clip_triangle_to_view(v, to_view(v, tri_vertex(prim, 0u)), to_view(v, tri_vertex(prim, 1u)), to_view(v, tri_vertex(prim, 2u)));
+}
+
+// Whether clip_triangle_to_view would keep the triangle unchanged.
+fn inside_view(v: View, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> bool {
+    for (var k = 0u; k < 6u; k++) {
+        let h = view_halfspace(v, k);
+        if !(hs_eval(h, a, v.eps) >= 0.0 && hs_eval(h, b, v.eps) >= 0.0 && hs_eval(h, c, v.eps) >= 0.0) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The triangle in view space, clipped to the view; `inside` from the vertex shader.
+fn fragment_polygon(v: View, prim: u32, inside: u32) -> Polygon {
+    if inside == 1u {
+        return polygon_triangle(to_view(v, tri_vertex(prim, 0u)), to_view(v, tri_vertex(prim, 1u)), to_view(v, tri_vertex(prim, 2u)));
+    }
+    return view_polygon(v, prim);
 }
 
 // Six vertices per triangle, one instance per view.
@@ -49,10 +72,14 @@ fn cover_vs(@builtin(vertex_index) vi: u32, @builtin(instance_index) view: u32) 
     if v.slot == NO_SLOT || prim >= params.n_tris {
         return out;
     }
-    let r = polygon_tile_range(v, view_polygon(v, prim));
+    let a = to_view(v, tri_vertex(prim, 0u));
+    let b = to_view(v, tri_vertex(prim, 1u));
+    let c = to_view(v, tri_vertex(prim, 2u));
+    let r = polygon_tile_range(v, clip_triangle_to_view(v, a, b, c));
     if !r.ok {
         return out;
     }
+    out.inside = select(0u, 1u, inside_view(v, a, b, c));
     // Corners 0..5: (lo,lo) (hi,lo) (lo,hi) (hi,lo) (hi,hi) (lo,hi).
     let x_hi = corner == 1u || corner == 3u || corner == 4u;
     let y_hi = corner == 2u || corner == 4u || corner == 5u;
@@ -76,7 +103,7 @@ fn covered(in: CoverOut) -> Covered {
     let v = views[in.view];
     let i = u32(in.pos.x);
     let j = u32(in.pos.y);
-    let e = tile_depth_extent(v, view_polygon(v, in.prim), i, j);
+    let e = tile_depth_extent(v, fragment_polygon(v, in.prim, in.inside), i, j);
     let tile = v.slot * tile_count(v) + j * v.tiles + i;
     return Covered(e.ok, tile, e.lo, e.hi);
 }
