@@ -84,6 +84,22 @@ pub const ALL_KINDS: [RayKind; 9] = [
     RayKind::OnSurface,
 ];
 
+/// `n` random triangles of sizes 1–50 % of `scale` in a box of half-size `scale`.
+pub fn random_scene(seed: u64, n: usize, scale: f32) -> Vec<Triangle> {
+    let mut rng = Rng(seed);
+    (0..n)
+        .map(|_| {
+            let c = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ) * scale;
+            let s = scale * rng.range(0.01, 0.5);
+            Triangle::new(c + rng.dir() * s, c + rng.dir() * s, c + rng.dir() * s)
+        })
+        .collect()
+}
+
 /// `n` rays of each kind for a scene.
 pub fn adversarial_rays(tris: &[Triangle], n: usize, seed: u64) -> Vec<Ray> {
     let mut out = Vec::new();

@@ -6,23 +6,8 @@ use dirt_cpu::{Ads, trace_with_stats};
 use dirt_gpu::testing::{any_gpu, current_test_name, exact_gpu};
 use dirt_gpu::{GpuAds, TraceResources};
 use dirt_math::{Ray, Triangle, Vec3};
-use dirt_tests::{Rng, adversarial_rays};
+use dirt_tests::{adversarial_rays, random_scene};
 use proptest::prelude::*;
-
-fn random_scene(seed: u64, n: usize, scale: f32) -> Vec<Triangle> {
-    let mut rng = Rng(seed);
-    (0..n)
-        .map(|_| {
-            let c = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            ) * scale;
-            let s = scale * rng.range(0.01, 0.5);
-            Triangle::new(c + rng.dir() * s, c + rng.dir() * s, c + rng.dir() * s)
-        })
-        .collect()
-}
 
 /// Every list as a sorted set.
 fn sorted_lists(l: &dirt_core::IdLists) -> Vec<Vec<u32>> {

@@ -13,7 +13,7 @@ use dirt_gpu::trace::STRUCTURE_FULL;
 use dirt_gpu::{Gpu, GpuAds, GpuMesh, TraceResources};
 use dirt_math::view::NO_SLOT;
 use dirt_math::{Hit, Ray, RayStats, Triangle, Vec3, ViewGpu};
-use dirt_tests::{Rng, adversarial_rays, read_buffer};
+use dirt_tests::{adversarial_rays, random_scene, read_buffer};
 use proptest::prelude::*;
 use wgpu::util::DeviceExt;
 
@@ -309,21 +309,6 @@ fn params_strategy() -> impl Strategy<Value = AdsParams> {
             tile: 1,
             center: center.map(|(x, y, z)| Vec3::new(x, y, z)),
         })
-}
-
-fn random_scene(seed: u64, n: usize, scale: f32) -> Vec<Triangle> {
-    let mut rng = Rng(seed);
-    (0..n)
-        .map(|_| {
-            let c = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            ) * scale;
-            let s = scale * rng.range(0.01, 0.5);
-            Triangle::new(c + rng.dir() * s, c + rng.dir() * s, c + rng.dir() * s)
-        })
-        .collect()
 }
 
 proptest! {

@@ -129,15 +129,6 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             scene.name
         );
     }
-    // A frame is the whole render.
-    let (params, mut chosen) = match args.backend {
-        // These build no DIRT structure: nothing to choose.
-        RenderBackend::Reference | RenderBackend::Brute => (args.ads.params(), None),
-        _ => args.ads.choose(&scene, settings.max_rays(), None)?,
-    };
-    let mut kept = None;
-    let traversal = args.traversal;
-    let tris = &scene.triangles;
     let gpu = match args.backend {
         RenderBackend::Auto | RenderBackend::Gpu => match Gpu::open() {
             Ok(g) => {
@@ -161,6 +152,22 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         },
         _ => None,
     };
+    // A frame is the whole render.
+    let (params, mut chosen) = match args.backend {
+        // These build no DIRT structure: nothing to choose.
+        RenderBackend::Reference | RenderBackend::Brute => (args.ads.params(), None),
+        // On the GPU the choice must fit the device's bindings.
+        _ => args.ads.choose_within(
+            &scene,
+            settings.max_rays(),
+            None,
+            gpu.as_ref()
+                .map(|g| g.limits.max_storage_buffer_binding_size),
+        )?,
+    };
+    let mut kept = None;
+    let traversal = args.traversal;
+    let tris = &scene.triangles;
     let build = std::time::Instant::now();
     let mut tracer: Box<dyn Tracer + '_> = match (args.backend, &gpu) {
         (RenderBackend::Auto | RenderBackend::Gpu, Some(g)) => Box::new(
