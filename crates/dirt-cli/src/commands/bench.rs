@@ -161,9 +161,15 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         args.seed,
     )
     .with_context(|| format!("cannot make rays for scene {}", scene.name))?;
-    let params = args
-        .ads
-        .params_for(&scene, rays.len() as u64, Some(&rays))?;
+    // The GPU first, when asked for: the cost model's choice must fit its bindings.
+    let opened = args.backends.contains(&Backend::Gpu).then(Gpu::open);
+    let max_binding = match &opened {
+        Some(Ok(g)) => Some(g.limits.max_storage_buffer_binding_size),
+        _ => None,
+    };
+    let (params, _) =
+        args.ads
+            .choose_within(&scene, rays.len() as u64, Some(&rays), max_binding)?;
     params
         .validate()
         .with_context(|| format!("cannot build the acceleration structure ({params:?})"))?;
@@ -234,8 +240,8 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     }
 
     // GPU.
-    let gpu_state = if backends.contains(&Backend::Gpu) {
-        match Gpu::open() {
+    let gpu_state = if let Some(opened) = opened {
+        match opened {
             Ok(gpu) => {
                 eprintln!("{}", crate::gpu::gpu_line(&gpu));
                 let adapter = gpu.describe();
