@@ -94,17 +94,12 @@ impl Scan {
 
     pub(crate) fn record(&self, gpu: &Gpu, enc: &mut wgpu::CommandEncoder) {
         for (add, bind, (x, y)) in &self.steps {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("scan"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(if *add {
+            let pipeline = if *add {
                 &gpu.pipelines.scan_add
             } else {
                 &gpu.pipelines.scan_blocks
-            });
-            pass.set_bind_group(0, bind, &[]);
-            pass.dispatch_workgroups(*x, *y, 1);
+            };
+            crate::record_dispatch(enc, "scan", pipeline, bind, [*x, *y, 1]);
         }
     }
 }

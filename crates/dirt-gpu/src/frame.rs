@@ -320,13 +320,7 @@ impl GpuAds {
                 &[(3, &self.hiz)],
             );
             let (x, y) = grid(gpu, frame.cells.div_ceil(64));
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("clear_depth"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(p);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
+            crate::record_dispatch(enc, "clear_depth", p, &bind, [x, y, 1]);
         }
         if n_tris > 0 {
             let fd = &gpu.pipelines.fill_depth;

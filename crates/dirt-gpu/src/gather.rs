@@ -110,11 +110,5 @@ pub(crate) fn record(
         entries: &entries,
     });
     let (x, y) = grid(gpu, (mesh.layout.triangles as u64).div_ceil(64));
-    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some("gather"),
-        timestamp_writes: None,
-    });
-    pass.set_pipeline(p);
-    pass.set_bind_group(0, &bind, &[]);
-    pass.dispatch_workgroups(x, y, 1);
+    crate::record_dispatch(enc, "gather", p, &bind, [x, y, 1]);
 }

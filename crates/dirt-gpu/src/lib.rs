@@ -356,6 +356,23 @@ pub(crate) fn bind_buffers(
     })
 }
 
+/// Records one compute pass: `pipeline` over `groups` workgroups with `bind` as group 0.
+pub(crate) fn record_dispatch(
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind: &wgpu::BindGroup,
+    [x, y, z]: [u32; 3],
+) {
+    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind, &[]);
+    pass.dispatch_workgroups(x, y, z);
+}
+
 /// Copies `size` bytes of `src` from `offset` back to the CPU.
 pub(crate) fn read_back(
     gpu: &Gpu,

@@ -42,14 +42,8 @@ impl MipDepth {
 
     /// Records every level, finest first.
     pub(crate) fn record(&self, gpu: &Gpu, enc: &mut wgpu::CommandEncoder) {
-        for (bind, [x, y, z]) in &self.levels {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("mip_depth"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&gpu.pipelines.mip_depth);
-            pass.set_bind_group(0, bind, &[]);
-            pass.dispatch_workgroups(*x, *y, *z);
+        for (bind, groups) in &self.levels {
+            crate::record_dispatch(enc, "mip_depth", &gpu.pipelines.mip_depth, bind, *groups);
         }
     }
 }

@@ -8,7 +8,7 @@
 //! allocated.
 
 use crate::fill_primitives::grid;
-use crate::{Gpu, bind_buffers};
+use crate::{Gpu, bind_buffers, record_dispatch};
 use dirt_math::{Aabb, Vec3, ViewGpu, ViewSet, ViewsKind};
 
 /// The views buffer before the first build: each view's axes, tan, tiles,
@@ -46,22 +46,16 @@ pub(crate) fn record(
         &[(0, tris), (1, views), (2, state), (3, params)],
     );
     let (x, y) = grid(gpu, (n_tris as u64).div_ceil(64));
-    let steps: [(&wgpu::ComputePipeline, [u32; 3]); 4] = [
-        (bounds, [x, y, 1]),
-        (from_bounds, [1, 1, 1]),
-        (reach, [x, y, n_views]),
-        (leave_out, [1, 1, 1]),
+    // (pipeline, workgroups, one thread per triangle): those have nothing to do without triangles.
+    let steps = [
+        (bounds, [x, y, 1], true),
+        (from_bounds, [1, 1, 1], false),
+        (reach, [x, y, n_views], true),
+        (leave_out, [1, 1, 1], false),
     ];
-    for (pipeline, [x, y, z]) in steps {
-        if n_tris == 0 && (std::ptr::eq(pipeline, bounds) || std::ptr::eq(pipeline, reach)) {
-            continue;
+    for (pipeline, groups, per_triangle) in steps {
+        if !(per_triangle && n_tris == 0) {
+            record_dispatch(enc, "views", pipeline, &bind, groups);
         }
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("views"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(x, y, z);
     }
 }
