@@ -30,10 +30,12 @@
 //! run it.
 
 mod compose;
+mod ids;
 mod layout;
 mod validate;
 
 pub use compose::{Composed, ShaderError, compose, compose_with};
+pub use ids::{ID_BINDING, MAX_ID_CHUNKS, compose_with_ids, ids_module};
 pub use layout::{StructLayout, struct_layout};
 pub use validate::{validate, validate_all, validate_source, validate_source_with_info};
 

@@ -13,6 +13,10 @@ struct BuildParams {
     n_views: u32,
     tiles: u32,
     buckets: u32,
+    id_shift: u32, // list ids per chunk: 2^id_shift (ids.wgsl)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<storage, read> tris: array<f32>;

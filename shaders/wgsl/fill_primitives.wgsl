@@ -6,11 +6,11 @@
 #import encode
 #import bucket
 #import coverage
+#import ids
 
 @group(0) @binding(3) var<storage, read> depth: array<u32>;
 // Counts while counting; cursors (a copy of the offsets) while filling.
 @group(0) @binding(4) var<storage, read_write> lists: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read_write> ids: array<u32>;
 
 // The bucket range of a covered fragment, as dirt_math::bucket::bucket_range.
 fn bucket_span(c: Covered) -> vec3<u32> {
@@ -53,11 +53,9 @@ fn fill(in: CoverOut) {
     for (var k = l.x; k <= l.y; k++) {
         let at = atomicAdd(&lists[k], 1u);
         // A build into ids sized ahead of the count (GpuAds::encode_build) may
-        // find them too small: nothing is written past the end, and the trace
-        // sees offsets' total above the ids' length and reports every ray.
-        if at < arrayLength(&ids) {
-            ids[at] = in.prim;
-        }
+        // find them too small: nothing is written past their end, and the
+        // trace sees offsets' total above their capacity and reports every ray.
+        id_store(at, params.id_shift, in.prim);
     }
 }
 

@@ -20,6 +20,7 @@
 #import dda
 #import triangle
 #import work
+#import ids
 
 // dirt_gpu::TraceParams
 struct TraceParams {
@@ -33,8 +34,8 @@ struct TraceParams {
     budget: u32, // loop iterations per ray per dispatch (dirt_gpu::trace::WORK_BUDGET at most)
     capacity: u32, // rays the pool has room for
     with_stats: u32, // 1: write per-ray statistics
-    _pad0: u32,
-    _pad1: u32,
+    id_shift: u32, // list ids per chunk: 2^id_shift (ids.wgsl)
+    id_capacity: u32, // list ids the chunks hold
 }
 
 // dirt_gpu::PoolHeader
@@ -62,7 +63,6 @@ struct Pool {
 @group(0) @binding(4) var<uniform> params: TraceParams;
 @group(0) @binding(5) var<storage, read> hiz: array<u32>;
 @group(0) @binding(6) var<storage, read> offsets: array<u32>;
-@group(0) @binding(7) var<storage, read> ids: array<u32>;
 @group(0) @binding(8) var<storage, read_write> stats: array<RayStats>;
 @group(0) @binding(9) var<storage, read_write> pool: Pool;
 @group(0) @binding(10) var<storage, read_write> dispatch: array<u32>;
@@ -200,7 +200,7 @@ fn visit_tile(v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
         inside = false;
         for (; at < end && step(4u, at); at++) {
             g_stats.tests += 1u;
-            intersect_closest(ids[at]);
+            intersect_closest(id_load(at, params.id_shift));
         }
     }
 }
@@ -555,7 +555,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     // Lists that did not fit their ids (a build recorded ahead of its count):
     // the structure is incomplete, and every ray says so.
-    if offsets[params.n_slots * params.tiles * params.tiles * params.buckets] > arrayLength(&ids) {
+    if offsets[params.n_slots * params.tiles * params.tiles * params.buckets] > params.id_capacity {
         hits[r] = Hit(STRUCTURE_FULL_ID, 0.0, 0.0, 0.0);
         if params.with_stats == 1u {
             stats[r] = RayStats(0u, 0u, 0u, 0u);

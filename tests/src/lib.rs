@@ -400,8 +400,20 @@ impl GpuDiff {
 /// skipped: a bit comparison needs [`dirt_gpu::testing::exact_gpu`].
 pub fn gpu_differences(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> Option<GpuDiff> {
     let g = dirt_gpu::testing::exact_gpu(&dirt_gpu::testing::current_test_name())?;
-    let cpu = Ads::build(tris, params).expect("cpu build");
     let ads = dirt_gpu::GpuAds::build(g, tris, params).expect("gpu build");
+    Some(gpu_differences_of(g, &ads, tris, rays))
+}
+
+/// [`gpu_differences`] of a structure `ads` already built on `g` (an exact
+/// context: the caller checks), by either build path.
+pub fn gpu_differences_of(
+    g: &dirt_gpu::Gpu,
+    ads: &dirt_gpu::GpuAds,
+    tris: &[Triangle],
+    rays: &[Ray],
+) -> GpuDiff {
+    let params = &ads.params;
+    let cpu = Ads::build(tris, params).expect("cpu build");
     let mut out = GpuDiff::default();
     let hiz = ads.read_hiz(g).expect("read hi-z");
     for (l, (a, b)) in hiz.iter().zip(&cpu.hiz).enumerate() {
@@ -426,7 +438,7 @@ pub fn gpu_differences(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> O
         out.structure.push(format!("{params:?}: id lists differ"));
     }
     for trav in [Traversal::Linear, Traversal::HiZ] {
-        let traced = dirt_gpu::trace::trace_report(g, &ads, rays, trav).expect("gpu trace");
+        let traced = dirt_gpu::trace::trace_report(g, ads, rays, trav).expect("gpu trace");
         let (ch, cs) = dirt_cpu::trace_with_stats(&cpu, tris, rays, trav);
         for i in 0..rays.len() {
             let line = || {
@@ -442,7 +454,7 @@ pub fn gpu_differences(tris: &[Triangle], rays: &[Ray], params: &AdsParams) -> O
             }
         }
     }
-    Some(out)
+    out
 }
 
 /// Asserts GPU == CPU in everything [`gpu_differences`] compares; skipped (and

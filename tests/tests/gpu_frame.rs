@@ -625,16 +625,10 @@ fn wrong_meshes_and_structures_are_errors() {
         0,
         "nothing was recorded"
     );
-    // More ids than one binding holds: refused by name before any allocation.
+    // More ids than the id bindings hold: refused by name before any allocation.
     let e = GpuAds::frame(g, &params, u64::MAX / 8).expect_err("too large");
     assert!(
-        matches!(
-            e,
-            dirt_gpu::GpuError::TooLarge {
-                what: "list ids",
-                ..
-            }
-        ),
+        matches!(e, dirt_gpu::GpuError::IdsTooLarge { bindings, .. } if bindings == g.id_bindings()),
         "{e}"
     );
 }

@@ -94,8 +94,8 @@ fn shared_structs_match_their_wgsl() {
             budget,
             capacity,
             with_stats,
-            _pad0,
-            _pad1
+            id_shift,
+            id_capacity
         }),
     );
     check(
@@ -115,7 +115,11 @@ fn shared_structs_match_their_wgsl() {
             n_tris,
             n_views,
             tiles,
-            buckets
+            buckets,
+            id_shift,
+            _pad0,
+            _pad1,
+            _pad2
         }),
     );
     check(

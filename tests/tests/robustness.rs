@@ -1081,7 +1081,7 @@ fn empty_scene_misses_everywhere() {
 
 /// Scenes beyond the adapter's binding size: a context whose
 /// `max_storage_buffer_binding_size` is lowered (`Gpu::limits` is what every
-/// size check reads) refuses each buffer that does not fit with
+/// size check reads) refuses each buffer bound whole that does not fit with
 /// `GpuError::TooLarge` naming it, and traces rays in chunks otherwise.
 #[test]
 fn scenes_beyond_gpu_limits_are_refused_by_name() {
@@ -1117,11 +1117,11 @@ fn scenes_beyond_gpu_limits_are_refused_by_name() {
         30 * 36 < hiz && hiz < offsets && offsets < nodes * 4,
         "{hiz} {offsets} {nodes}"
     );
-    let cases: [(u64, &str); 4] = [
+    // (The list ids are split across bindings: the next test.)
+    let cases: [(u64, &str); 3] = [
         (30 * 36 - 4, "triangles"),
         (hiz - 4, "Hi-Z pyramid"),
         (offsets - 4, "list offsets"),
-        (nodes * 4 - 4, "list ids"),
     ];
     for (limit, expect) in cases {
         g.limits.max_storage_buffer_binding_size = limit;
@@ -1410,6 +1410,112 @@ fn renderer_on_a_scene_of_only_degenerate_triangles() {
     );
 }
 
+/// List ids beyond one binding (the stacked layers of `layers`: every tile
+/// near the centre lists 256 of them): with `max_storage_buffer_binding_size`
+/// lowered below the ids, both build paths split them across the device's id
+/// bindings and equal the CPU to the bit (structure, hits, statistics); past
+/// every id binding the build is refused with `GpuError::IdsTooLarge`.
+#[test]
+fn list_ids_beyond_one_binding_are_split_across_bindings() {
+    let Some(exact) =
+        dirt_gpu::testing::exact_gpu("list_ids_beyond_one_binding_are_split_across_bindings")
+    else {
+        return;
+    };
+    let mut g = dirt_gpu::Gpu::new().expect("a second context");
+    assert!(g.exact, "{}", exact.describe());
+    let tris = dirt_scene::builtin("layers").expect("built-in").triangles;
+    // One bucket: few offsets, every layer in one list per tile.
+    let params = AdsParams {
+        views: ViewsKind::Cube,
+        resolution: 16,
+        buckets: 1,
+        tile: 1,
+        center: None,
+    };
+    let cpu = Ads::build(&tris, &params).expect("cpu build");
+    let entries = cpu.lists.ids.len() as u64;
+    let whole = [
+        tris.len() as u64 * 36,
+        cpu.hiz.iter().map(|l| l.len() as u64 * 8).sum::<u64>(),
+        cpu.lists.offsets.len() as u64 * 4,
+    ]
+    .into_iter()
+    .max()
+    .unwrap_or(0);
+    // One binding: the smallest power of two that holds the buffers bound
+    // whole and lets the ids fit the id bindings.
+    let id_bindings = g.id_bindings() as u64;
+    let per_chunk = entries.div_ceil(id_bindings).next_power_of_two();
+    let binding = (per_chunk * 4).max(whole.next_power_of_two());
+    let chunks = entries.div_ceil(binding / 4);
+    assert!(
+        chunks >= 2 && chunks <= id_bindings,
+        "{entries} entries in chunks of {}: {chunks} of {id_bindings} bindings",
+        binding / 4
+    );
+    g.limits.max_storage_buffer_binding_size = binding;
+    let rays = adversarial_rays(&tris, 400, 37);
+
+    let host = dirt_gpu::GpuAds::build(&g, &tris, &params).expect("host build, ids split");
+    assert_eq!(host.id_chunks() as u64, chunks);
+    let d = dirt_tests::gpu_differences_of(&g, &host, &tris, &rays);
+    assert!(d.is_empty(), "host build: {}", d.summary());
+
+    // A frame build from a small hint: it overflows once, grows the ids
+    // across the bindings and equals the CPU.
+    let mut frame = dirt_gpu::DirtGpu::new(&g, params, Traversal::HiZ);
+    frame.frame_builds = true;
+    frame.entries_hint = 16;
+    dirt_core::Tracer::build(&mut frame, &tris).expect("frame build, ids split");
+    let ads = frame.ads().expect("built");
+    let fb = ads.feedback().expect("a frame structure");
+    assert_eq!((fb.entries_needed, fb.grown), (entries, 1));
+    // Grown with a quarter of headroom, as far as the id bindings allow.
+    let capacity = (entries + entries / 4).min(id_bindings * (binding / 4));
+    assert_eq!(fb.capacity, capacity);
+    assert_eq!(ads.id_chunks() as u64, capacity.div_ceil(binding / 4));
+    for trav in [Traversal::Linear, Traversal::HiZ] {
+        let got = dirt_gpu::trace::trace_report(&g, ads, &rays, trav).expect("trace");
+        let (want, stats) = dirt_cpu::trace_with_stats(&cpu, &tris, &rays, trav);
+        for i in 0..rays.len() {
+            assert_eq!(got.hits[i].bits(), want[i].bits(), "{trav:?} ray {i}");
+            assert_eq!(got.stats[i], stats[i], "{trav:?} ray {i}");
+        }
+    }
+
+    // The smallest binding that holds the buffers bound whole: the ids need
+    // more than every id binding together, and are refused by name.
+    let small = whole.next_power_of_two();
+    assert!(
+        entries > id_bindings * (small / 4),
+        "{entries} entries fit {id_bindings} bindings of {small} bytes"
+    );
+    g.limits.max_storage_buffer_binding_size = small;
+    match dirt_gpu::GpuAds::build(&g, &tris, &params) {
+        Err(dirt_gpu::GpuError::IdsTooLarge {
+            bytes,
+            bindings,
+            per_binding,
+        }) => assert_eq!(
+            (bytes, bindings as u64, per_binding),
+            (entries * 4, id_bindings, small)
+        ),
+        other => panic!(
+            "expected IdsTooLarge, got {:?}",
+            other.map(|a| a.id_chunks())
+        ),
+    }
+    let mut frame = dirt_gpu::DirtGpu::new(&g, params, Traversal::HiZ);
+    frame.frame_builds = true;
+    // Refused when the count makes the ids grow, not for the hint.
+    frame.entries_hint = 16;
+    match dirt_core::Tracer::build(&mut frame, &tris) {
+        Err(e) => assert!(e.to_string().contains("list ids need"), "{e}"),
+        Ok(_) => panic!("a frame build beyond every id binding succeeded"),
+    }
+}
+
 /// The cost model under a device's binding limit: it chooses a candidate
 /// whose every GPU binding fits, and says so by name when none does.
 #[test]
@@ -1421,18 +1527,36 @@ fn the_cost_model_chooses_within_a_devices_binding_limit() {
     let model = &cost::CostModel::CALIBRATED;
     let trav = dirt_core::Traversal::HiZ;
     let free = cost::auto(&tris, &sample, 1 << 20, trav, model, &cands).expect("a choice");
+    let limits = |max_binding, id_bindings| {
+        Some(dirt_core::BindingLimits {
+            max_binding,
+            id_bindings,
+        })
+    };
+    // One binding too small for what the free choice binds whole.
     let limit = free.best.largest_binding / 2;
-    let within = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, Some(limit))
-        .expect("a choice within the limit");
+    let within = cost::auto_within(
+        &tris,
+        &sample,
+        1 << 20,
+        trav,
+        model,
+        &cands,
+        limits(limit, 8),
+    )
+    .expect("a choice within the limit");
     assert!(
         within.best.largest_binding <= limit,
         "{} > {limit}",
         within.best.largest_binding
     );
     assert!(within.too_large > 0);
-    let e = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, Some(64))
+    // Every candidate ranked fits, ids included (split across the id bindings).
+    let l = limits(limit, 8).expect("limits");
+    assert!(within.ranked.iter().all(|c| c.fits(&l)));
+    let e = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, limits(64, 1))
         .err()
         .map(|e| e.to_string())
         .unwrap_or_default();
-    assert!(e.contains("binding of 64 bytes"), "{e}");
+    assert!(e.contains("one binding of 64 bytes"), "{e}");
 }

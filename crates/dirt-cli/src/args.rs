@@ -111,15 +111,15 @@ impl AdsArgs {
         self.choose_within(scene, rays_per_frame, sample, None)
     }
 
-    /// [`AdsArgs::choose`] for a device that binds at most `max_binding`
-    /// bytes in one buffer: the cost model chooses among the candidates that
-    /// fit (`dirt_cpu::cost::auto_within`).
+    /// [`AdsArgs::choose`] for a GPU of binding limits `limits`: the cost
+    /// model chooses among the candidates that fit
+    /// (`dirt_cpu::cost::auto_within`).
     pub fn choose_within(
         &self,
         scene: &Scene,
         rays_per_frame: u64,
         sample: Option<&[Ray]>,
-        max_binding: Option<u64>,
+        limits: Option<dirt_core::BindingLimits>,
     ) -> Result<(AdsParams, Option<dirt_cpu::Ads>)> {
         let base = self.params();
         let g = self.given;
@@ -159,14 +159,16 @@ impl AdsArgs {
             Traversal::HiZ,
             &dirt_cpu::cost::CostModel::CALIBRATED,
             &uniq,
-            max_binding,
+            limits,
         )
         .context("cost model: cannot build the candidates")?;
         if choice.too_large > 0 {
             eprintln!(
-                "ads: {} candidates need more than one binding of the GPU holds ({} bytes) and were not chosen",
+                "ads: {} candidates need more than the GPU binds (one binding of {} bytes for triangles, Hi-Z and offsets; {} list ids in {} bindings) and were not chosen",
                 choice.too_large,
-                max_binding.unwrap_or(0)
+                limits.map_or(0, |l| l.max_binding),
+                limits.map_or(0, |l| l.id_capacity()),
+                limits.map_or(0, |l| l.id_bindings)
             );
         }
         let best = choice.best.params;

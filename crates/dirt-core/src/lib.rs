@@ -10,6 +10,7 @@
 //!   triangle reaches left out ([`left_out_views`] says which and why).
 //! - [`gather`]: an application's mesh (vertex and index bytes, stride,
 //!   offset, transform) as triangles, the CPU reference of the GPU's `gather`.
+//! - [`BindingLimits`]: what a GPU binds, as it bounds a structure's buffers.
 //! - [`IdLists`] and [`BuildTimings`]: the structure's lists and stage times, as
 //!   both backends produce them.
 //!
@@ -18,6 +19,7 @@
 
 mod error;
 pub mod gather;
+mod limits;
 mod lists;
 mod params;
 mod tracer;
@@ -25,6 +27,7 @@ mod views;
 
 pub use dirt_math::{Hit, Ray, RayStats, Triangle, ViewSet, ViewsKind};
 pub use error::CoreError;
+pub use limits::BindingLimits;
 pub use lists::{BuildTimings, IdLists};
 pub use params::{AdsParams, Traversal};
 pub use tracer::{BuildReport, TraceReport, Tracer, check_lengths};

@@ -18,7 +18,7 @@
 //! gives the same hits.
 
 use crate::{Ads, CpuError, trace_with_stats};
-use dirt_core::{AdsParams, Traversal, ViewsKind};
+use dirt_core::{AdsParams, BindingLimits, Traversal, ViewsKind};
 use dirt_math::{Ray, Triangle};
 
 /// Weights of the frame-cost model, in nanoseconds per unit.
@@ -216,10 +216,20 @@ pub struct Candidate {
     pub frame_ms: f64,
     /// Bytes of the structure.
     pub bytes: u64,
-    /// Bytes of the largest buffer the GPU binds for it (triangles, the Hi-Z
-    /// pyramid, list offsets or list ids): what a device's
+    /// Bytes of the largest buffer the GPU binds whole for it (triangles,
+    /// the Hi-Z pyramid or list offsets): what a device's
     /// `max_storage_buffer_binding_size` must hold.
     pub largest_binding: u64,
+    /// List entries (ids): split across a device's id bindings
+    /// ([`dirt_core::BindingLimits::id_capacity`]), not bound whole.
+    pub ids: u64,
+}
+
+impl Candidate {
+    /// Whether a device of `limits` can hold its structure.
+    pub fn fits(&self, limits: &BindingLimits) -> bool {
+        limits.fits(self.largest_binding, self.ids)
+    }
 }
 
 impl Candidate {
@@ -245,11 +255,11 @@ impl Candidate {
                 tris.len() as u64 * 36,
                 ads.hiz.iter().map(|l| l.len() as u64 * 8).sum(),
                 ads.lists.offsets.len() as u64 * 4,
-                ads.lists.ids.len() as u64 * 4,
             ]
             .into_iter()
             .max()
             .unwrap_or(0),
+            ids: ads.lists.ids.len() as u64,
         }
     }
 }
@@ -474,11 +484,12 @@ pub fn auto(
     )
 }
 
-/// [`auto`] for a device that binds at most `max_binding` bytes in one
-/// buffer (a GPU's `max_storage_buffer_binding_size`): a candidate whose
-/// largest binding ([`Candidate::largest_binding`]) exceeds it is built and
-/// measured but never chosen, and when the first guesses all exceed it the
-/// smaller candidates are tried, smallest first. An error when none fits.
+/// [`auto`] for a device of binding limits `limits` (a GPU's
+/// [`BindingLimits`]): a candidate that does not fit them
+/// ([`Candidate::fits`]: a buffer bound whole beyond one binding, or list
+/// ids beyond the id bindings) is built and measured but never chosen, and
+/// when the first guesses all exceed them the smaller candidates are tried,
+/// smallest first. An error when none fits.
 pub fn auto_within(
     tris: &[Triangle],
     sample: &[Ray],
@@ -486,9 +497,9 @@ pub fn auto_within(
     traversal: Traversal,
     model: &CostModel,
     candidates: &[AdsParams],
-    max_binding: Option<u64>,
+    limits: Option<BindingLimits>,
 ) -> Result<AutoChoice, CpuError> {
-    let fits = |c: &Candidate| max_binding.is_none_or(|m| c.largest_binding <= m);
+    let fits = |c: &Candidate| limits.is_none_or(|l| c.fits(&l));
     let mut too_large: usize = 0;
     let mut ranked: Vec<Candidate> = Vec::new();
     let mut best_ads: Option<Ads> = None;
@@ -634,9 +645,12 @@ pub fn auto_within(
         }
     }
     let best = *ranked.first().ok_or_else(|| {
-        CpuError::Core(dirt_core::CoreError::InvalidParams(match max_binding {
-            Some(m) if too_large > 0 => format!(
-                "none of the {too_large} candidates built fits one binding of {m} bytes (the device's max_storage_buffer_binding_size); the CPU backend traces this scene"
+        CpuError::Core(dirt_core::CoreError::InvalidParams(match limits {
+            Some(l) if too_large > 0 => format!(
+                "none of the {too_large} candidates built fits the device: one binding of {} bytes (max_storage_buffer_binding_size) for triangles, Hi-Z and offsets, {} list ids in {} bindings; the CPU backend traces this scene",
+                l.max_binding,
+                l.id_capacity(),
+                l.id_bindings
             ),
             _ => "the cost model was given no candidates".into(),
         }))

@@ -27,9 +27,11 @@ impl GpuOptions {
     }
 }
 
-/// Storage buffers the trace binds in one compute stage (rays, hits,
-/// triangles, Hi-Z, offsets, ids, statistics, continuation pool): WebGPU's
-/// default limit, which every adapter gives.
+/// Storage buffers the trace binds in one compute stage with the list ids in
+/// one binding (rays, hits, triangles, Hi-Z, offsets, statistics,
+/// continuation pool, ids): WebGPU's default limit, which every adapter gives.
+/// Each storage buffer a device allows beyond it is one more binding for the
+/// list ids ([`Gpu::id_bindings`]), up to [`dirt_shaders::MAX_ID_CHUNKS`].
 pub const STORAGE_BUFFERS_PER_STAGE: u32 = 8;
 
 /// A device ready to run dirt's passes.
@@ -45,6 +47,8 @@ pub struct Gpu {
     /// Why [`Gpu::exact`] is what it is, in words.
     pub exactness: &'static str,
     pub(crate) pipelines: crate::Pipelines,
+    /// Bindings the list ids are split across (see [`Gpu::id_bindings`]).
+    id_bindings: u32,
     /// Submissions and host waits dirt made itself (see [`Gpu::host_syncs`]).
     submits: std::sync::atomic::AtomicU64,
     waits: std::sync::atomic::AtomicU64,
@@ -156,6 +160,10 @@ impl Gpu {
         let supported = adapter.limits();
         let limits = wgpu::Limits {
             max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
+            max_storage_buffers_per_shader_stage: supported
+                .max_storage_buffers_per_shader_stage
+                .min(STORAGE_BUFFERS_PER_STAGE - 1 + dirt_shaders::MAX_ID_CHUNKS)
+                .max(wgpu::Limits::default().max_storage_buffers_per_shader_stage),
             max_buffer_size: supported.max_buffer_size,
             max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
             ..Default::default()
@@ -189,7 +197,10 @@ impl Gpu {
             )));
         }
         let (exact, exactness) = exact_path(info.backend, device.features(), options);
-        let pipelines = crate::Pipelines::new(device, exact)?;
+        let id_bindings = (limits.max_storage_buffers_per_shader_stage
+            - (STORAGE_BUFFERS_PER_STAGE - 1))
+            .min(dirt_shaders::MAX_ID_CHUNKS);
+        let pipelines = crate::Pipelines::new(device, exact, id_bindings)?;
         Ok(Gpu {
             device: device.clone(),
             queue: queue.clone(),
@@ -198,6 +209,7 @@ impl Gpu {
             exact,
             exactness,
             pipelines,
+            id_bindings,
             submits: Default::default(),
             waits: Default::default(),
             lost: Default::default(),
@@ -210,6 +222,25 @@ impl Gpu {
             "{} ({:?}, {})",
             self.info.name, self.info.backend, self.info.driver_info
         )
+    }
+
+    /// Bindings the list ids are split across: one per storage buffer the
+    /// device allows per stage beyond [`STORAGE_BUFFERS_PER_STAGE`] − 1, up to
+    /// [`dirt_shaders::MAX_ID_CHUNKS`]. Fixed when the pipelines are compiled.
+    pub fn id_bindings(&self) -> u32 {
+        self.id_bindings
+    }
+
+    /// What this device binds, as it bounds a structure: read from
+    /// [`Gpu::limits`] each time (tests lower them) and [`Gpu::id_bindings`].
+    pub fn binding_limits(&self) -> dirt_core::BindingLimits {
+        dirt_core::BindingLimits {
+            max_binding: self
+                .limits
+                .max_storage_buffer_binding_size
+                .min(self.limits.max_buffer_size),
+            id_bindings: self.id_bindings,
+        }
     }
 
     /// True on lavapipe, the software Vulkan device CI asserts bits on.

@@ -1,14 +1,15 @@
 //! Pass `fill_primitives` (`fill_primitives.wgsl`): counts per list (raster
 //! `count`), an exclusive prefix sum in place (compute `scan_blocks`,
-//! `scan_add`), the total read back to size the id buffer exactly, then the
+//! `scan_add`), the total read back to size the ids exactly, then the
 //! lists filled through atomic cursors (raster `fill`). Nothing is ever
-//! dropped: the buffer is as large as the count says, or the build fails
-//! before filling with [`GpuError::TooLarge`]. Mirrors `dirt_cpu::fill_primitives`.
+//! dropped: the ids (split across bindings, see `ids.wgsl`) hold as many as
+//! the count says, or the build fails before filling with
+//! [`GpuError::IdsTooLarge`]. Mirrors `dirt_cpu::fill_primitives`.
 
 use crate::fill_depth::draw_coverage;
+use crate::ids::Ids;
 use crate::{
-    BuildParams, Gpu, GpuError, ScanParams, bind_buffers, check_binding, read_back, storage_init,
-    uniform_init,
+    BuildParams, Gpu, GpuError, ScanParams, bind_buffers, read_back, storage_init, uniform_init,
 };
 
 const SCAN_BLOCK: u64 = 256;
@@ -122,7 +123,7 @@ pub(crate) fn fill_primitives(
     build: &BuildParams,
     content: &[u32],
     n_lists: u64,
-) -> Result<(wgpu::Buffer, wgpu::Buffer, u32), GpuError> {
+) -> Result<(wgpu::Buffer, Ids, u32), GpuError> {
     // Counts, then (after the scan) offsets; one extra zero so offsets[n_lists] is the total.
     let lists = storage_init(
         gpu,
@@ -148,13 +149,7 @@ pub(crate) fn fill_primitives(
     }
     scan(gpu, &lists, n_lists + 1)?;
     let total = bytemuck::pod_read_unaligned::<u32>(&read_back(gpu, &lists, n_lists * 4, 4)?);
-    check_binding(gpu, "list ids", total as u64 * 4)?;
-    let ids = storage_init(
-        gpu,
-        "ids",
-        &vec![0u8; total as usize * 4],
-        wgpu::BufferUsages::COPY_SRC,
-    );
+    let ids = Ids::new(gpu, total as u64)?;
     if total > 0 {
         let cursors = storage_init(
             gpu,
@@ -166,18 +161,19 @@ pub(crate) fn fill_primitives(
         enc.copy_buffer_to_buffer(&lists, 0, &cursors, 0, (n_lists + 1) * 4);
         gpu.submit(enc);
         let p = &gpu.pipelines.fill;
+        let mut buffers = vec![
+            (0, tris),
+            (1, views),
+            (2, build_uniform),
+            (3, hiz),
+            (4, &cursors),
+        ];
+        buffers.extend(ids.bindings(gpu));
         let bind = bind_buffers(
             gpu,
             "fill_primitives",
             &p.get_bind_group_layout(0),
-            &[
-                (0, tris),
-                (1, views),
-                (2, build_uniform),
-                (3, hiz),
-                (4, &cursors),
-                (5, &ids),
-            ],
+            &buffers,
         );
         draw_coverage(gpu, p, &bind, build, content);
         gpu.wait()?;

@@ -6,10 +6,12 @@
 //! submission, no wait and no read-back.
 //!
 //! **List storage without a read-back.** The number of list entries is known
-//! only on the GPU, after the count and the scan. The ids buffer is therefore
-//! sized ahead: from the caller's hint at first, then from the count of the
-//! latest completed build plus a quarter. `fill` writes no entry past the
-//! end; the trace compares the scan's total with the ids' length and, when
+//! only on the GPU, after the count and the scan. The ids (split across
+//! bindings, see [`crate::Gpu::id_bindings`]) are therefore sized ahead: from
+//! the caller's hint at first, then from the count of the latest completed
+//! build plus a quarter (as far as the id bindings allow). `fill` writes no
+//! entry past their end; the trace compares the scan's total with their
+//! capacity and, when
 //! they did not fit, writes [`crate::trace::STRUCTURE_FULL`] as every ray's
 //! hit (statistics zero) — an incomplete structure is never traced. Each
 //! build also copies its total into a small buffer mapped when its
@@ -27,6 +29,7 @@
 use crate::fill_depth::{record_coverage, tile_target};
 use crate::fill_primitives::{Scan, grid};
 use crate::gather::GpuMesh;
+use crate::ids::Ids;
 use crate::mip_depth::MipDepth;
 use crate::{BuildParams, FrameState, Gpu, GpuAds, GpuError, ViewsParams, bind_buffers};
 use dirt_core::{AdsParams, BuildTimings, CoreError};
@@ -129,7 +132,6 @@ impl GpuAds {
         let n_lists = n_views as u64 * (tiles as u64).pow(2) * params.buckets as u64;
         crate::check_binding(gpu, "list offsets", (n_lists + 1) * 4)?;
         let capacity = entries_hint.max(4);
-        crate::check_binding(gpu, "list ids", capacity * 4)?;
 
         let template = crate::views::template(params.views, tiles);
         let views_uniform = crate::buffer_init(
@@ -146,7 +148,7 @@ impl GpuAds {
             STORAGE | COPY_SRC | COPY_DST,
         );
         let cursors = buffer(gpu, "cursors", (n_lists + 1) * 4, STORAGE | COPY_DST);
-        let ids = buffer(gpu, "ids", capacity * 4, STORAGE | COPY_SRC);
+        let ids = Ids::new(gpu, capacity)?;
         let uniform = wgpu::BufferUsages::UNIFORM | COPY_DST;
         let frame = Frame {
             state: buffer(
@@ -206,7 +208,7 @@ impl GpuAds {
             recorded: f.recorded,
             completed: f.shared.completed.load(Ordering::Acquire),
             entries_needed: f.shared.needed.load(Ordering::Acquire),
-            capacity: self.ids.size() / 4,
+            capacity: self.ids.capacity(),
             overflows: f.shared.overflows.load(Ordering::Acquire),
             grown: f.grown,
             non_finite: (bad != 0).then(|| u32::MAX - bad),
@@ -252,10 +254,12 @@ impl GpuAds {
         crate::check_binding(gpu, "triangles", n_tris as u64 * 36)?;
         // Grow what the latest completed build (or this one's count) says is too small.
         let needed = frame.shared.needed.load(Ordering::Acquire);
-        if needed > self.ids.size() / 4 {
-            let capacity = needed + needed / 4;
-            crate::check_binding(gpu, "list ids", capacity * 4)?;
-            self.ids = buffer(gpu, "ids", capacity * 4, STORAGE | COPY_SRC);
+        if needed > self.ids.capacity() {
+            // The quarter of headroom only as far as the device binds; the
+            // count itself must fit, or the build is refused by name.
+            let limit = gpu.binding_limits().id_capacity();
+            let capacity = (needed + needed / 4).min(limit.max(needed));
+            self.ids = Ids::new(gpu, capacity)?;
             frame.grown += 1;
         }
         if n_tris as u64 * 36 > self.tris.size() {
@@ -267,6 +271,8 @@ impl GpuAds {
             n_views: self.n_views,
             tiles,
             buckets: self.params.buckets,
+            id_shift: self.ids.shift(),
+            ..Default::default()
         };
         gpu.queue
             .write_buffer(&frame.build_params, 0, bytemuck::bytes_of(&build));
@@ -359,22 +365,23 @@ impl GpuAds {
             let bytes = (frame.n_lists + 1) * 4;
             enc.copy_buffer_to_buffer(&self.offsets, 0, &frame.cursors, 0, bytes);
             let fill = &gpu.pipelines.fill;
+            let mut buffers = vec![
+                (0, &self.tris),
+                (1, &self.views_uniform),
+                (2, &frame.build_params),
+                (3, &self.hiz),
+                (4, &frame.cursors),
+            ];
+            buffers.extend(self.ids.bindings(gpu));
             let bind = bind_buffers(
                 gpu,
                 "fill_primitives fill",
                 &fill.get_bind_group_layout(0),
-                &[
-                    (0, &self.tris),
-                    (1, &self.views_uniform),
-                    (2, &frame.build_params),
-                    (3, &self.hiz),
-                    (4, &frame.cursors),
-                    (5, &self.ids),
-                ],
+                &buffers,
             );
             record_coverage(enc, &frame.target, fill, &bind, n_tris, 0..self.n_views);
         }
-        frame.record_feedback(gpu, enc, &self.offsets, self.ids.size() / 4);
+        frame.record_feedback(gpu, enc, &self.offsets, self.ids.capacity());
         frame.recorded += 1;
         self.n_tris = n_tris;
         Ok(())

@@ -40,6 +40,7 @@ pub mod fill_depth;
 pub mod fill_primitives;
 pub mod frame;
 pub mod gather;
+mod ids;
 pub mod mip_depth;
 pub mod params;
 pub mod selftest;
@@ -95,6 +96,16 @@ pub enum GpuError {
         what: &'static str,
         bytes: u64,
         limit: u64,
+    },
+    /// The list ids need more than the device binds, split across
+    /// [`Gpu::id_bindings`] bindings (see [`dirt_core::BindingLimits`]).
+    #[error(
+        "the list ids need {bytes} bytes; this device binds at most {bindings} × {per_binding} bytes of them (max_storage_buffers_per_shader_stage, max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene"
+    )]
+    IdsTooLarge {
+        bytes: u64,
+        bindings: u32,
+        per_binding: u64,
     },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
@@ -203,14 +214,19 @@ pub(crate) fn compute_sharing(
 }
 
 impl Pipelines {
-    pub(crate) fn new(device: &wgpu::Device, passthrough: bool) -> Result<Pipelines, GpuError> {
+    /// The pipelines of every stage; the list ids split across `id_chunks` bindings.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        passthrough: bool,
+        id_chunks: u32,
+    ) -> Result<Pipelines, GpuError> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let fd = spirv::compile(device, "fill_depth", passthrough)?;
-        let md = spirv::compile(device, "mip_depth", passthrough)?;
-        let fp = spirv::compile(device, "fill_primitives", passthrough)?;
-        let tr = spirv::compile(device, "trace", passthrough)?;
-        let vw = spirv::compile(device, "views", passthrough)?;
-        let ga = spirv::compile(device, "gather", passthrough)?;
+        let fd = spirv::compile(device, "fill_depth", passthrough, id_chunks)?;
+        let md = spirv::compile(device, "mip_depth", passthrough, id_chunks)?;
+        let fp = spirv::compile(device, "fill_primitives", passthrough, id_chunks)?;
+        let tr = spirv::compile(device, "trace", passthrough, id_chunks)?;
+        let vw = spirv::compile(device, "views", passthrough, id_chunks)?;
+        let ga = spirv::compile(device, "gather", passthrough, id_chunks)?;
         let views: [wgpu::ComputePipeline; 4] = compute_sharing(
             device,
             &vw,
@@ -277,7 +293,8 @@ pub struct GpuAds {
     pub(crate) hiz: wgpu::Buffer,
     /// `slots·tiles²·B + 1` offsets after the scan (views without content have none).
     pub(crate) offsets: wgpu::Buffer,
-    pub(crate) ids: wgpu::Buffer,
+    /// The list ids, split across bindings ([`ids`]).
+    pub(crate) ids: ids::Ids,
     /// The kept parts of a frame structure ([`GpuAds::frame`]).
     pub(crate) frame: Option<Box<frame::Frame>>,
 }
@@ -289,6 +306,21 @@ pub(crate) fn check_binding(gpu: &Gpu, what: &'static str, bytes: u64) -> Result
         return Err(GpuError::TooLarge { what, bytes, limit });
     }
     Ok(())
+}
+
+/// A zeroed storage buffer of `bytes` (at least 16, a multiple of 4) with `extra` usages.
+pub(crate) fn new_buffer(
+    gpu: &Gpu,
+    label: &str,
+    bytes: u64,
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(16).div_ceil(4) * 4,
+        usage: wgpu::BufferUsages::STORAGE | extra,
+        mapped_at_creation: false,
+    })
 }
 
 /// A storage buffer holding `data` (at least 16 bytes: empty bindings are invalid).
@@ -471,6 +503,8 @@ impl GpuAds {
             n_views,
             tiles,
             buckets: params.buckets,
+            id_shift: gpu.binding_limits().id_shift(),
+            ..Default::default()
         };
         let build_uniform = uniform_init(gpu, "build params", bytemuck::bytes_of(&build));
         let hiz = fill_depth::new_hiz_buffer(gpu, cells)?;
@@ -520,10 +554,15 @@ impl GpuAds {
         })
     }
 
+    /// Buffers the list ids take (one per binding they need; see [`Gpu::id_bindings`]).
+    pub fn id_chunks(&self) -> usize {
+        self.ids.chunks()
+    }
+
     /// Bytes of the structure on the GPU: the Hi-Z pyramid (depth bounds
     /// included), list offsets and ids, as allocated.
     pub fn memory_bytes(&self) -> u64 {
-        self.hiz.size() + self.offsets.size() + self.ids.size()
+        self.hiz.size() + self.offsets.size() + self.ids.bytes()
     }
 
     /// The views as the passes read them (six entries; a view without
@@ -559,18 +598,14 @@ impl GpuAds {
             (n_lists + 1) * 4,
         )?);
         let total = offsets.last().copied().unwrap_or(0) as u64;
-        if total > self.ids.size() / 4 {
+        if total > self.ids.capacity() {
             return Err(GpuError::TooLarge {
                 what: "list ids (the build overflowed them; build again)",
                 bytes: total * 4,
-                limit: self.ids.size(),
+                limit: self.ids.capacity() * 4,
             });
         }
-        let ids =
-            bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(gpu, &self.ids, 0, total * 4)?);
-        Ok(IdLists {
-            offsets,
-            ids: ids[..total as usize].to_vec(),
-        })
+        let ids = self.ids.read(gpu, total)?;
+        Ok(IdLists { offsets, ids })
     }
 }

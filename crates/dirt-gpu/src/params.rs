@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// `struct BuildParams` of `coverage.wgsl`. repr(C), Pod, 16 bytes.
+/// `struct BuildParams` of `coverage.wgsl`. repr(C), Pod, 32 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct BuildParams {
@@ -11,6 +11,11 @@ pub struct BuildParams {
     pub n_views: u32,
     pub tiles: u32,
     pub buckets: u32,
+    /// List ids per chunk: `2^id_shift` ([`dirt_core::BindingLimits::id_shift`]).
+    pub id_shift: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// `struct MipParams` of `mip_depth.wgsl`. repr(C), Pod, 16 bytes.
@@ -52,8 +57,10 @@ pub struct TraceParams {
     pub capacity: u32,
     /// 1: write per-ray statistics.
     pub with_stats: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    /// List ids per chunk: `2^id_shift` ([`dirt_core::BindingLimits::id_shift`]).
+    pub id_shift: u32,
+    /// List ids the chunks hold: a larger scan total means the lists did not fit.
+    pub id_capacity: u32,
 }
 
 /// `struct PoolHeader` of `trace.wgsl`: the head of the continuation pool.

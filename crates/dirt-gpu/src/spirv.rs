@@ -90,11 +90,15 @@ pub fn decorate_no_contraction(words: &mut Vec<u32>) -> Result<usize, String> {
     Ok(ids.len())
 }
 
-fn parse(stage: &'static str) -> Result<(naga::Module, ModuleInfo, String), GpuError> {
-    let composed = dirt_shaders::compose(stage).map_err(|e| GpuError::Shader {
-        stage,
-        message: e.to_string(),
-    })?;
+fn parse(
+    stage: &'static str,
+    id_chunks: u32,
+) -> Result<(naga::Module, ModuleInfo, String), GpuError> {
+    let composed =
+        dirt_shaders::compose_with_ids(stage, id_chunks).map_err(|e| GpuError::Shader {
+            stage,
+            message: e.to_string(),
+        })?;
     let module = naga::front::wgsl::parse_str(&composed.text).map_err(|e| GpuError::Shader {
         stage,
         message: e.emit_to_string(&composed.text),
@@ -114,8 +118,9 @@ pub(crate) fn compile(
     device: &wgpu::Device,
     stage: &'static str,
     passthrough: bool,
+    id_chunks: u32,
 ) -> Result<Stage, GpuError> {
-    let (module, info, text) = parse(stage)?;
+    let (module, info, text) = parse(stage, id_chunks)?;
     let wgsl = (!passthrough).then(|| {
         device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(stage),
@@ -315,7 +320,7 @@ mod tests {
 
     #[test]
     fn decorates_every_float_op() {
-        let (module, info, _) = parse("trace").expect("trace parses");
+        let (module, info, _) = parse("trace", 1).expect("trace parses");
         let mut words =
             naga::back::spv::write_vec(&module, &info, &naga::back::spv::Options::default(), None)
                 .expect("spv");

@@ -302,7 +302,8 @@ impl TraceResources {
             budget: self.budget,
             capacity: self.capacity,
             with_stats: stats.is_some() as u32,
-            ..Default::default()
+            id_shift: ads.ids.shift(),
+            id_capacity: ads.ids.capacity().min(u32::MAX as u64) as u32,
         };
         let uniform = self
             .params
@@ -313,7 +314,7 @@ impl TraceResources {
             .clone();
         let stats_buf = stats.unwrap_or(&self.no_stats);
         let stats_bytes = if stats.is_some() { n * 16 } else { 16 };
-        let entries = [
+        let mut entries: Vec<wgpu::BindGroupEntry<'_>> = [
             (0, binding(rays, n * 32)),
             (1, binding(hits, n * 16)),
             (2, ads.tris.as_entire_binding()),
@@ -321,11 +322,17 @@ impl TraceResources {
             (4, uniform.as_entire_binding()),
             (5, ads.hiz.as_entire_binding()),
             (6, ads.offsets.as_entire_binding()),
-            (7, ads.ids.as_entire_binding()),
             (8, binding(stats_buf, stats_bytes)),
             (9, pool.as_entire_binding()),
         ]
-        .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource });
+        .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
+        .into();
+        entries.extend(ads.ids.bindings(gpu).into_iter().map(|(binding, buf)| {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buf.as_entire_binding(),
+            }
+        }));
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace"),
             layout: &gpu.pipelines.trace.get_bind_group_layout(0),

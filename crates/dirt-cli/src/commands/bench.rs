@@ -163,13 +163,13 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     .with_context(|| format!("cannot make rays for scene {}", scene.name))?;
     // The GPU first, when asked for: the cost model's choice must fit its bindings.
     let opened = args.backends.contains(&Backend::Gpu).then(Gpu::open);
-    let max_binding = match &opened {
-        Some(Ok(g)) => Some(g.limits.max_storage_buffer_binding_size),
+    let limits = match &opened {
+        Some(Ok(g)) => Some(g.binding_limits()),
         _ => None,
     };
-    let (params, _) =
-        args.ads
-            .choose_within(&scene, rays.len() as u64, Some(&rays), max_binding)?;
+    let (params, _) = args
+        .ads
+        .choose_within(&scene, rays.len() as u64, Some(&rays), limits)?;
     params
         .validate()
         .with_context(|| format!("cannot build the acceleration structure ({params:?})"))?;

@@ -161,8 +161,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             &scene,
             settings.max_rays(),
             None,
-            gpu.as_ref()
-                .map(|g| g.limits.max_storage_buffer_binding_size),
+            gpu.as_ref().map(|g| g.binding_limits()),
         )?,
     };
     let mut kept = None;

@@ -141,12 +141,10 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         TraceBackend::Brute | TraceBackend::Obvhs | TraceBackend::Embree => (None, None),
         _ => {
             // On the GPU the choice must fit the device's bindings.
-            let max_binding = gpu
-                .as_ref()
-                .map(|g| g.limits.max_storage_buffer_binding_size);
+            let limits = gpu.as_ref().map(|g| g.binding_limits());
             let (p, ads) =
                 args.ads
-                    .choose_within(&scene, rays.len() as u64, Some(&rays), max_binding)?;
+                    .choose_within(&scene, rays.len() as u64, Some(&rays), limits)?;
             (Some(p), ads)
         }
     };
