@@ -29,13 +29,15 @@
 //! parses on its own); `cargo xtask validate-shaders` and this crate's tests
 //! run it.
 
+mod chunked;
 mod compose;
-mod ids;
 mod layout;
 mod validate;
 
+pub use chunked::{
+    CHUNKED_MODULES, Chunks, ID_BINDING, MAX_CHUNKS, TRI_BINDING, chunked_module, compose_chunked,
+};
 pub use compose::{Composed, ShaderError, compose, compose_with};
-pub use ids::{ID_BINDING, MAX_ID_CHUNKS, compose_with_ids, ids_module};
 pub use layout::{StructLayout, struct_layout};
 pub use validate::{validate, validate_all, validate_source, validate_source_with_info};
 

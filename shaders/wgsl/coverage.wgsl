@@ -6,6 +6,7 @@
 #import types
 #import view
 #import clip
+#import tris
 
 // dirt_gpu::BuildParams
 struct BuildParams {
@@ -14,12 +15,11 @@ struct BuildParams {
     tiles: u32,
     buckets: u32,
     id_shift: u32, // list ids per chunk: 2^id_shift (ids.wgsl)
-    _pad0: u32,
+    tri_shift: u32, // triangles per chunk: 2^tri_shift (tris.wgsl)
     _pad1: u32,
     _pad2: u32,
 }
 
-@group(0) @binding(0) var<storage, read> tris: array<f32>;
 @group(0) @binding(1) var<uniform> views: array<View, 6>;
 @group(0) @binding(2) var<uniform> params: BuildParams;
 
@@ -34,8 +34,7 @@ struct CoverOut {
 }
 
 fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
-    let b = prim * 9u + k * 3u;
-    return vec3<f32>(tris[b], tris[b + 1u], tris[b + 2u]);
+    return tri_load(prim, k, params.tri_shift);
 }
 
 // The triangle in view space, clipped to the view.

@@ -6,6 +6,7 @@
 // A vertex index past the end of the vertex buffer gives NaN positions: the
 // `bounds` entry of views.wgsl reports the triangle as non-finite, so a bad
 // index is an error of the build, never a read out of bounds.
+#import tris_out
 
 // dirt_gpu::GatherParams
 struct GatherParams {
@@ -21,13 +22,13 @@ struct GatherParams {
     first_index: u32,
     // 1: apply `rows` (a 3×4 affine transform, row-major).
     has_transform: u32,
-    _pad: u32,
+    // Triangles per output chunk: 2^tri_shift (tris.wgsl).
+    tri_shift: u32,
     rows: array<vec4<f32>, 3>,
 }
 
 @group(0) @binding(0) var<storage, read> vertices: array<u32>;
 @group(0) @binding(1) var<storage, read> indices: array<u32>;
-@group(0) @binding(2) var<storage, read_write> out_tris: array<f32>;
 @group(0) @binding(3) var<uniform> gp: GatherParams;
 
 fn vertex_index(i: u32) -> u32 {
@@ -57,7 +58,6 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     if t >= gp.n_tris {
         return;
     }
-    let out = (gp.first_tri + t) * 9u;
     for (var k = 0u; k < 3u; k++) {
         let v = vertex_index(3u * t + k);
         let base = v * gp.stride + gp.offset;
@@ -69,8 +69,6 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         if gp.has_transform == 1u {
             p = vec3<f32>(row(0u, p), row(1u, p), row(2u, p));
         }
-        out_tris[out + 3u * k] = p[0];
-        out_tris[out + 3u * k + 1u] = p[1];
-        out_tris[out + 3u * k + 2u] = p[2];
+        tri_store(gp.first_tri + t, k, gp.tri_shift, p);
     }
 }

@@ -1,8 +1,8 @@
 // The list ids, split across bindings so that no single binding limits how
-// many a structure holds (dirt_gpu::ids): entry `at` is word `at & mask` of
-// chunk `at >> shift`, each chunk 2^shift words. This file is the one-chunk
-// module; dirt_shaders::ids_module writes the same for more chunks, at
-// bindings 16, 17, ...
+// many a structure holds (dirt_gpu's id chunks): entry `at` is word
+// `at & mask` of chunk `at >> shift`, each chunk 2^shift words. This file is
+// the one-chunk module; dirt_shaders::chunked_module writes it for more
+// chunks, at bindings 16, 17, ...
 @group(0) @binding(16) var<storage, read_write> ids0: array<u32>;
 
 // Entry `at`; the caller keeps `at` below the ids' capacity.

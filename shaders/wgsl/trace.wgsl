@@ -21,6 +21,7 @@
 #import triangle
 #import work
 #import ids
+#import tris
 
 // dirt_gpu::TraceParams
 struct TraceParams {
@@ -36,6 +37,10 @@ struct TraceParams {
     with_stats: u32, // 1: write per-ray statistics
     id_shift: u32, // list ids per chunk: 2^id_shift (ids.wgsl)
     id_capacity: u32, // list ids the chunks hold
+    tri_shift: u32, // triangles per chunk: 2^tri_shift (tris.wgsl)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // dirt_gpu::PoolHeader
@@ -58,7 +63,6 @@ struct Pool {
 
 @group(0) @binding(0) var<storage, read> rays: array<Ray>;
 @group(0) @binding(1) var<storage, read_write> hits: array<Hit>;
-@group(0) @binding(2) var<storage, read> tris: array<f32>;
 @group(0) @binding(3) var<uniform> views: array<View, 6>;
 @group(0) @binding(4) var<uniform> params: TraceParams;
 @group(0) @binding(5) var<storage, read> hiz: array<u32>;
@@ -131,8 +135,7 @@ fn resumed(slot: u32) {
 }
 
 fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
-    let b = prim * 9u + k * 3u;
-    return vec3<f32>(tris[b], tris[b + 1u], tris[b + 2u]);
+    return tri_load(prim, k, params.tri_shift);
 }
 
 fn intersect_closest(prim: u32) {

@@ -16,6 +16,7 @@
 #import encode
 #import view
 #import clip
+#import tris
 
 // dirt_gpu::ViewsParams
 struct ViewsParams {
@@ -24,7 +25,7 @@ struct ViewsParams {
     kind: u32,
     // 1: `center` is given (the cube's centre, or the single view's eye).
     has_center: u32,
-    _pad0: u32,
+    tri_shift: u32, // triangles per chunk: 2^tri_shift (tris.wgsl)
     center: vec3<f32>,
     _pad1: u32,
 }
@@ -39,14 +40,12 @@ struct FrameState {
     reach: atomic<u32>,
 }
 
-@group(0) @binding(0) var<storage, read> tris: array<f32>;
 @group(0) @binding(1) var<storage, read_write> views: array<View, 6>;
 @group(0) @binding(2) var<storage, read_write> state: FrameState;
 @group(0) @binding(3) var<uniform> params: ViewsParams;
 
 fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
-    let b = prim * 9u + k * 3u;
-    return vec3<f32>(tris[b], tris[b + 1u], tris[b + 2u]);
+    return tri_load(prim, k, params.tri_shift);
 }
 
 fn is_finite(x: f32) -> bool {
@@ -59,8 +58,9 @@ fn bounds(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     if prim >= params.n_tris {
         return;
     }
-    for (var k = 0u; k < 9u; k++) {
-        if !is_finite(tris[prim * 9u + k]) {
+    for (var k = 0u; k < 3u; k++) {
+        let p = tri_vertex(prim, k);
+        if !(is_finite(p.x) && is_finite(p.y) && is_finite(p.z)) {
             atomicMax(&state.bad, 0xffffffffu - prim);
             return;
         }

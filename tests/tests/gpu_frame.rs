@@ -628,7 +628,7 @@ fn wrong_meshes_and_structures_are_errors() {
     // More ids than the id bindings hold: refused by name before any allocation.
     let e = GpuAds::frame(g, &params, u64::MAX / 8).expect_err("too large");
     assert!(
-        matches!(e, dirt_gpu::GpuError::IdsTooLarge { bindings, .. } if bindings == g.id_bindings()),
+        matches!(e, dirt_gpu::GpuError::SplitTooLarge { what: "the list ids", bindings, .. } if bindings == g.id_bindings()),
         "{e}"
     );
 }

@@ -95,7 +95,11 @@ fn shared_structs_match_their_wgsl() {
             capacity,
             with_stats,
             id_shift,
-            id_capacity
+            id_capacity,
+            tri_shift,
+            _pad0,
+            _pad1,
+            _pad2
         }),
     );
     check(
@@ -117,7 +121,7 @@ fn shared_structs_match_their_wgsl() {
             tiles,
             buckets,
             id_shift,
-            _pad0,
+            tri_shift,
             _pad1,
             _pad2
         }),
@@ -139,7 +143,7 @@ fn shared_structs_match_their_wgsl() {
             n_tris,
             kind,
             has_center,
-            _pad0,
+            tri_shift,
             center,
             _pad1
         }),
@@ -160,7 +164,7 @@ fn shared_structs_match_their_wgsl() {
             index_format,
             first_index,
             has_transform,
-            _pad,
+            tri_shift,
             rows
         }),
     );

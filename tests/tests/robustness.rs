@@ -1081,7 +1081,7 @@ fn empty_scene_misses_everywhere() {
 
 /// Scenes beyond the adapter's binding size: a context whose
 /// `max_storage_buffer_binding_size` is lowered (`Gpu::limits` is what every
-/// size check reads) refuses each buffer bound whole that does not fit with
+/// size check reads) refuses each buffer bound whole (Hi-Z, offsets) that does not fit with
 /// `GpuError::TooLarge` naming it, and traces rays in chunks otherwise.
 #[test]
 fn scenes_beyond_gpu_limits_are_refused_by_name() {
@@ -1117,12 +1117,8 @@ fn scenes_beyond_gpu_limits_are_refused_by_name() {
         30 * 36 < hiz && hiz < offsets && offsets < nodes * 4,
         "{hiz} {offsets} {nodes}"
     );
-    // (The list ids are split across bindings: the next test.)
-    let cases: [(u64, &str); 3] = [
-        (30 * 36 - 4, "triangles"),
-        (hiz - 4, "Hi-Z pyramid"),
-        (offsets - 4, "list offsets"),
-    ];
+    // (Triangles and list ids are split across bindings: the next tests.)
+    let cases: [(u64, &str); 2] = [(hiz - 4, "Hi-Z pyramid"), (offsets - 4, "list offsets")];
     for (limit, expect) in cases {
         g.limits.max_storage_buffer_binding_size = limit;
         match dirt_gpu::GpuAds::build(&g, &tris, &params) {
@@ -1414,7 +1410,7 @@ fn renderer_on_a_scene_of_only_degenerate_triangles() {
 /// near the centre lists 256 of them): with `max_storage_buffer_binding_size`
 /// lowered below the ids, both build paths split them across the device's id
 /// bindings and equal the CPU to the bit (structure, hits, statistics); past
-/// every id binding the build is refused with `GpuError::IdsTooLarge`.
+/// every id binding the build is refused with `GpuError::SplitTooLarge`.
 #[test]
 fn list_ids_beyond_one_binding_are_split_across_bindings() {
     let Some(exact) =
@@ -1455,7 +1451,7 @@ fn list_ids_beyond_one_binding_are_split_across_bindings() {
         binding / 4
     );
     g.limits.max_storage_buffer_binding_size = binding;
-    let rays = adversarial_rays(&tris, 400, 37);
+    let rays = adversarial_rays(&tris, 100, 37);
 
     let host = dirt_gpu::GpuAds::build(&g, &tris, &params).expect("host build, ids split");
     assert_eq!(host.id_chunks() as u64, chunks);
@@ -1493,16 +1489,17 @@ fn list_ids_beyond_one_binding_are_split_across_bindings() {
     );
     g.limits.max_storage_buffer_binding_size = small;
     match dirt_gpu::GpuAds::build(&g, &tris, &params) {
-        Err(dirt_gpu::GpuError::IdsTooLarge {
+        Err(dirt_gpu::GpuError::SplitTooLarge {
+            what,
             bytes,
             bindings,
             per_binding,
         }) => assert_eq!(
-            (bytes, bindings as u64, per_binding),
-            (entries * 4, id_bindings, small)
+            (what, bytes, bindings as u64, per_binding),
+            ("the list ids", entries * 4, id_bindings, small)
         ),
         other => panic!(
-            "expected IdsTooLarge, got {:?}",
+            "expected SplitTooLarge, got {:?}",
             other.map(|a| a.id_chunks())
         ),
     }
@@ -1513,6 +1510,110 @@ fn list_ids_beyond_one_binding_are_split_across_bindings() {
     match dirt_core::Tracer::build(&mut frame, &tris) {
         Err(e) => assert!(e.to_string().contains("list ids need"), "{e}"),
         Ok(_) => panic!("a frame build beyond every id binding succeeded"),
+    }
+}
+
+/// Triangles beyond one binding (2,000 small ones in a box): with
+/// `max_storage_buffer_binding_size` lowered below them, both build paths
+/// split them across the device's triangle bindings (the frame build uploads
+/// them as one mesh per binding's worth) and equal the CPU to the bit; past
+/// every triangle binding the build is refused with `GpuError::SplitTooLarge`.
+#[test]
+fn triangles_beyond_one_binding_are_split_across_bindings() {
+    let Some(exact) =
+        dirt_gpu::testing::exact_gpu("triangles_beyond_one_binding_are_split_across_bindings")
+    else {
+        return;
+    };
+    let mut g = dirt_gpu::Gpu::new().expect("a second context");
+    assert!(g.exact, "{}", exact.describe());
+    // Small triangles: few list entries, so the triangles are the largest buffer.
+    let tris: Vec<Triangle> = dirt_tests::random_scene(41, 2000, 1.0)
+        .into_iter()
+        .map(|t| {
+            let c = (t.vertex(0) + t.vertex(1) + t.vertex(2)) / 3.0;
+            let s = |p: Vec3| c + (p - c) * 0.03;
+            Triangle::new(s(t.vertex(0)), s(t.vertex(1)), s(t.vertex(2)))
+        })
+        .collect();
+    let params = AdsParams {
+        views: ViewsKind::Single,
+        resolution: 8,
+        buckets: 2,
+        tile: 1,
+        center: None,
+    };
+    let cpu = Ads::build(&tris, &params).expect("cpu build");
+    let n = tris.len() as u64;
+    let tri_bindings = g.tri_bindings() as u64;
+    // A binding of exactly a power of two triangles, as few as fit the bindings.
+    let per_chunk = n.div_ceil(tri_bindings).next_power_of_two();
+    let binding = per_chunk * 36;
+    let chunks = n.div_ceil(per_chunk);
+    assert!(
+        chunks >= 2 && chunks <= tri_bindings,
+        "{n} triangles in chunks of {per_chunk}: {chunks} of {tri_bindings} bindings"
+    );
+    let whole = [
+        cpu.hiz.iter().map(|l| l.len() as u64 * 8).sum::<u64>(),
+        cpu.lists.offsets.len() as u64 * 4,
+    ]
+    .into_iter()
+    .max()
+    .unwrap_or(0);
+    let entries = cpu.lists.ids.len() as u64;
+    assert!(
+        whole <= binding && entries <= binding / 4,
+        "{whole} {entries} {binding}"
+    );
+    g.limits.max_storage_buffer_binding_size = binding;
+    let rays = adversarial_rays(&tris, 40, 41);
+
+    let host = dirt_gpu::GpuAds::build(&g, &tris, &params).expect("host build, triangles split");
+    assert_eq!(host.tri_chunks() as u64, chunks);
+    let d = dirt_tests::gpu_differences_of(&g, &host, &tris, &rays);
+    assert!(d.is_empty(), "host build: {}", d.summary());
+
+    let mut frame = dirt_gpu::DirtGpu::new(&g, params, Traversal::HiZ);
+    frame.frame_builds = true;
+    frame.entries_hint = entries;
+    dirt_core::Tracer::build(&mut frame, &tris).expect("frame build, triangles split");
+    let ads = frame.ads().expect("built");
+    assert_eq!(ads.tri_chunks() as u64, chunks);
+    for trav in [Traversal::Linear, Traversal::HiZ] {
+        let got = dirt_gpu::trace::trace_report(&g, ads, &rays, trav).expect("trace");
+        let (want, stats) = dirt_cpu::trace_with_stats(&cpu, &tris, &rays, trav);
+        for i in 0..rays.len() {
+            assert_eq!(got.hits[i].bits(), want[i].bits(), "{trav:?} ray {i}");
+            assert_eq!(got.stats[i], stats[i], "{trav:?} ray {i}");
+        }
+    }
+
+    // Half the binding: more chunks than the triangle bindings, refused by name.
+    let small = binding / 2;
+    assert!(n > tri_bindings * (per_chunk / 2) && whole <= small);
+    g.limits.max_storage_buffer_binding_size = small;
+    match dirt_gpu::GpuAds::build(&g, &tris, &params) {
+        Err(dirt_gpu::GpuError::SplitTooLarge {
+            what,
+            bytes,
+            bindings,
+            per_binding,
+        }) => assert_eq!(
+            (what, bytes, bindings as u64, per_binding),
+            ("the triangles", n * 36, tri_bindings, (per_chunk / 2) * 36)
+        ),
+        other => panic!(
+            "expected SplitTooLarge, got {:?}",
+            other.map(|a| a.tri_chunks())
+        ),
+    }
+    let mut frame = dirt_gpu::DirtGpu::new(&g, params, Traversal::HiZ);
+    frame.frame_builds = true;
+    frame.entries_hint = entries;
+    match dirt_core::Tracer::build(&mut frame, &tris) {
+        Err(e) => assert!(e.to_string().contains("the triangles need"), "{e}"),
+        Ok(_) => panic!("a frame build beyond every triangle binding succeeded"),
     }
 }
 
@@ -1531,6 +1632,7 @@ fn the_cost_model_chooses_within_a_devices_binding_limit() {
         Some(dirt_core::BindingLimits {
             max_binding,
             id_bindings,
+            tri_bindings: id_bindings,
         })
     };
     // One binding too small for what the free choice binds whole.

@@ -164,10 +164,12 @@ impl AdsArgs {
         .context("cost model: cannot build the candidates")?;
         if choice.too_large > 0 {
             eprintln!(
-                "ads: {} candidates need more than the GPU binds (one binding of {} bytes for triangles, Hi-Z and offsets; {} list ids in {} bindings) and were not chosen",
+                "ads: {} candidates need more than the GPU binds (one binding of {} bytes for Hi-Z and offsets; {} triangles and {} list ids, each in {} and {} bindings) and were not chosen",
                 choice.too_large,
                 limits.map_or(0, |l| l.max_binding),
+                limits.map_or(0, |l| l.tri_capacity()),
                 limits.map_or(0, |l| l.id_capacity()),
+                limits.map_or(0, |l| l.tri_bindings),
                 limits.map_or(0, |l| l.id_bindings)
             );
         }

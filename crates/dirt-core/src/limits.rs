@@ -4,11 +4,12 @@
 
 /// A device's binding limits as they bound a structure's size.
 ///
-/// The triangles, the Hi-Z pyramid and the list offsets are each one
-/// binding; the list ids, the one buffer that grows with depth complexity,
-/// are split across [`BindingLimits::id_bindings`] bindings of
-/// `2^`[`BindingLimits::id_shift`] ids each (`ids.wgsl`), so a structure's
-/// lists may hold several bindings' worth.
+/// The Hi-Z pyramid and the list offsets are each one binding. The
+/// triangles and the list ids, the buffers that grow with the scene and
+/// with its depth complexity, are split across
+/// [`BindingLimits::tri_bindings`] and [`BindingLimits::id_bindings`]
+/// bindings of a power of two elements each (`tris.wgsl`, `ids.wgsl`), so
+/// that they may hold several bindings' worth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BindingLimits {
     /// Bytes one storage binding holds: the device's
@@ -16,15 +17,22 @@ pub struct BindingLimits {
     pub max_binding: u64,
     /// Bindings the list ids are split across (at least 1).
     pub id_bindings: u32,
+    /// Bindings the triangles are split across (at least 1).
+    pub tri_bindings: u32,
+}
+
+/// Base-2 logarithm of the largest power of two of `elem_bytes` elements one
+/// binding of `max_binding` bytes holds, at most 2^30 (so that shifts and
+/// masks stay within a u32).
+fn shift_for(max_binding: u64, elem_bytes: u64) -> u32 {
+    let n = (max_binding / elem_bytes).max(1);
+    (63 - n.leading_zeros()).min(30)
 }
 
 impl BindingLimits {
-    /// Base-2 logarithm of the ids per chunk: the largest power of two of
-    /// 4-byte words that one binding holds, at most 2^30 (so that shifts and
-    /// masks stay within a u32).
+    /// Base-2 logarithm of the list ids per chunk (4 bytes each).
     pub fn id_shift(&self) -> u32 {
-        let words = (self.max_binding / 4).max(1);
-        (63 - words.leading_zeros()).min(30)
+        shift_for(self.max_binding, 4)
     }
 
     /// List ids the chunks can hold, at most `u32::MAX` (offsets are u32).
@@ -32,10 +40,22 @@ impl BindingLimits {
         ((self.id_bindings.max(1) as u64) << self.id_shift()).min(u32::MAX as u64)
     }
 
-    /// Whether a structure of these sizes fits: `largest_other` bytes in the
-    /// largest of triangles, Hi-Z pyramid and offsets, `ids` list entries.
-    pub fn fits(&self, largest_other: u64, ids: u64) -> bool {
-        largest_other <= self.max_binding && ids <= self.id_capacity()
+    /// Base-2 logarithm of the triangles per chunk (36 bytes each).
+    pub fn tri_shift(&self) -> u32 {
+        shift_for(self.max_binding, 36)
+    }
+
+    /// Triangles the chunks can hold, at most `u32::MAX`.
+    pub fn tri_capacity(&self) -> u64 {
+        ((self.tri_bindings.max(1) as u64) << self.tri_shift()).min(u32::MAX as u64)
+    }
+
+    /// Whether a structure of these sizes fits: `largest_whole` bytes in the
+    /// larger of Hi-Z pyramid and offsets, `tris` triangles, `ids` list entries.
+    pub fn fits(&self, largest_whole: u64, tris: u64, ids: u64) -> bool {
+        largest_whole <= self.max_binding
+            && tris <= self.tri_capacity()
+            && ids <= self.id_capacity()
     }
 }
 
@@ -48,6 +68,7 @@ mod tests {
         let l = |max_binding, id_bindings| BindingLimits {
             max_binding,
             id_bindings,
+            tri_bindings: 2,
         };
         assert_eq!(l(128 << 20, 1).id_shift(), 25);
         assert_eq!(l((128 << 20) - 4, 1).id_shift(), 24);
@@ -56,8 +77,12 @@ mod tests {
         assert_eq!(l(0, 1).id_shift(), 0);
         assert_eq!(l(u64::MAX, 8).id_shift(), 30);
         assert_eq!(l(u64::MAX, 8).id_capacity(), u32::MAX as u64);
-        assert!(l(1000, 3).fits(1000, 384));
-        assert!(!l(1000, 3).fits(1001, 1));
-        assert!(!l(1000, 3).fits(4, 385));
+        // 1000 bytes hold 27 triangles: chunks of 16, two bindings.
+        assert_eq!(l(1000, 3).tri_shift(), 4);
+        assert_eq!(l(1000, 3).tri_capacity(), 32);
+        assert!(l(1000, 3).fits(1000, 32, 384));
+        assert!(!l(1000, 3).fits(1001, 1, 1));
+        assert!(!l(1000, 3).fits(4, 33, 1));
+        assert!(!l(1000, 3).fits(4, 1, 385));
     }
 }

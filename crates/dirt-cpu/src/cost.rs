@@ -216,10 +216,13 @@ pub struct Candidate {
     pub frame_ms: f64,
     /// Bytes of the structure.
     pub bytes: u64,
-    /// Bytes of the largest buffer the GPU binds whole for it (triangles,
-    /// the Hi-Z pyramid or list offsets): what a device's
+    /// Bytes of the larger buffer the GPU binds whole for it (the Hi-Z
+    /// pyramid or the list offsets): what a device's
     /// `max_storage_buffer_binding_size` must hold.
     pub largest_binding: u64,
+    /// Triangles: split across a device's triangle bindings
+    /// ([`dirt_core::BindingLimits::tri_capacity`]), not bound whole.
+    pub tris: u64,
     /// List entries (ids): split across a device's id bindings
     /// ([`dirt_core::BindingLimits::id_capacity`]), not bound whole.
     pub ids: u64,
@@ -228,7 +231,7 @@ pub struct Candidate {
 impl Candidate {
     /// Whether a device of `limits` can hold its structure.
     pub fn fits(&self, limits: &BindingLimits) -> bool {
-        limits.fits(self.largest_binding, self.ids)
+        limits.fits(self.largest_binding, self.tris, self.ids)
     }
 }
 
@@ -252,13 +255,13 @@ impl Candidate {
             frame_ms: model.frame_ms(&counts, rays_per_frame),
             bytes: ads.memory().total(),
             largest_binding: [
-                tris.len() as u64 * 36,
                 ads.hiz.iter().map(|l| l.len() as u64 * 8).sum(),
                 ads.lists.offsets.len() as u64 * 4,
             ]
             .into_iter()
             .max()
             .unwrap_or(0),
+            tris: tris.len() as u64,
             ids: ads.lists.ids.len() as u64,
         }
     }
@@ -647,8 +650,10 @@ pub fn auto_within(
     let best = *ranked.first().ok_or_else(|| {
         CpuError::Core(dirt_core::CoreError::InvalidParams(match limits {
             Some(l) if too_large > 0 => format!(
-                "none of the {too_large} candidates built fits the device: one binding of {} bytes (max_storage_buffer_binding_size) for triangles, Hi-Z and offsets, {} list ids in {} bindings; the CPU backend traces this scene",
+                "none of the {too_large} candidates built fits the device: one binding of {} bytes (max_storage_buffer_binding_size) for Hi-Z and offsets, {} triangles in {} bindings, {} list ids in {} bindings; the CPU backend traces this scene",
                 l.max_binding,
+                l.tri_capacity(),
+                l.tri_bindings,
                 l.id_capacity(),
                 l.id_bindings
             ),

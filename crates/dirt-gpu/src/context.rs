@@ -27,11 +27,12 @@ impl GpuOptions {
     }
 }
 
-/// Storage buffers the trace binds in one compute stage with the list ids in
-/// one binding (rays, hits, triangles, Hi-Z, offsets, statistics,
-/// continuation pool, ids): WebGPU's default limit, which every adapter gives.
-/// Each storage buffer a device allows beyond it is one more binding for the
-/// list ids ([`Gpu::id_bindings`]), up to [`dirt_shaders::MAX_ID_CHUNKS`].
+/// Storage buffers the trace binds in one compute stage with the list ids and
+/// the triangles in one binding each (rays, hits, triangles, Hi-Z, offsets,
+/// statistics, continuation pool, ids): WebGPU's default limit, which every
+/// adapter gives. Each storage buffer a device allows beyond it is one more
+/// binding for the list ids ([`Gpu::id_bindings`]) and, once they have
+/// [`dirt_shaders::MAX_CHUNKS`], for the triangles ([`Gpu::tri_bindings`]).
 pub const STORAGE_BUFFERS_PER_STAGE: u32 = 8;
 
 /// A device ready to run dirt's passes.
@@ -49,6 +50,8 @@ pub struct Gpu {
     pub(crate) pipelines: crate::Pipelines,
     /// Bindings the list ids are split across (see [`Gpu::id_bindings`]).
     id_bindings: u32,
+    /// Bindings the triangles are split across (see [`Gpu::tri_bindings`]).
+    tri_bindings: u32,
     /// Submissions and host waits dirt made itself (see [`Gpu::host_syncs`]).
     submits: std::sync::atomic::AtomicU64,
     waits: std::sync::atomic::AtomicU64,
@@ -162,7 +165,7 @@ impl Gpu {
             max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
             max_storage_buffers_per_shader_stage: supported
                 .max_storage_buffers_per_shader_stage
-                .min(STORAGE_BUFFERS_PER_STAGE - 1 + dirt_shaders::MAX_ID_CHUNKS)
+                .min(STORAGE_BUFFERS_PER_STAGE - 2 + 2 * dirt_shaders::MAX_CHUNKS)
                 .max(wgpu::Limits::default().max_storage_buffers_per_shader_stage),
             max_buffer_size: supported.max_buffer_size,
             max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
@@ -197,10 +200,15 @@ impl Gpu {
             )));
         }
         let (exact, exactness) = exact_path(info.backend, device.features(), options);
-        let id_bindings = (limits.max_storage_buffers_per_shader_stage
-            - (STORAGE_BUFFERS_PER_STAGE - 1))
-            .min(dirt_shaders::MAX_ID_CHUNKS);
-        let pipelines = crate::Pipelines::new(device, exact, id_bindings)?;
+        // Bindings beyond the minimum go to the ids first (they grow fastest), then the triangles.
+        let extra = limits.max_storage_buffers_per_shader_stage - STORAGE_BUFFERS_PER_STAGE;
+        let id_bindings = 1 + extra.min(dirt_shaders::MAX_CHUNKS - 1);
+        let tri_bindings = 1 + (extra - (id_bindings - 1)).min(dirt_shaders::MAX_CHUNKS - 1);
+        let chunks = dirt_shaders::Chunks {
+            ids: id_bindings,
+            tris: tri_bindings,
+        };
+        let pipelines = crate::Pipelines::new(device, exact, chunks)?;
         Ok(Gpu {
             device: device.clone(),
             queue: queue.clone(),
@@ -210,6 +218,7 @@ impl Gpu {
             exactness,
             pipelines,
             id_bindings,
+            tri_bindings,
             submits: Default::default(),
             waits: Default::default(),
             lost: Default::default(),
@@ -224,11 +233,17 @@ impl Gpu {
         )
     }
 
-    /// Bindings the list ids are split across: one per storage buffer the
-    /// device allows per stage beyond [`STORAGE_BUFFERS_PER_STAGE`] − 1, up to
-    /// [`dirt_shaders::MAX_ID_CHUNKS`]. Fixed when the pipelines are compiled.
+    /// Bindings the list ids are split across: one, and one more per storage
+    /// buffer the device allows per stage beyond [`STORAGE_BUFFERS_PER_STAGE`],
+    /// up to [`dirt_shaders::MAX_CHUNKS`]. Fixed when the pipelines are compiled.
     pub fn id_bindings(&self) -> u32 {
         self.id_bindings
+    }
+
+    /// Bindings the triangles are split across: one, and one more per storage
+    /// buffer left after [`Gpu::id_bindings`], up to [`dirt_shaders::MAX_CHUNKS`].
+    pub fn tri_bindings(&self) -> u32 {
+        self.tri_bindings
     }
 
     /// What this device binds, as it bounds a structure: read from
@@ -240,6 +255,7 @@ impl Gpu {
                 .max_storage_buffer_binding_size
                 .min(self.limits.max_buffer_size),
             id_bindings: self.id_bindings,
+            tri_bindings: self.tri_bindings,
         }
     }
 

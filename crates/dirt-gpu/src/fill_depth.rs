@@ -2,7 +2,8 @@
 //! quad of every triangle; each fragment runs the exact tile test and updates
 //! the tile's `[zmin, zmax]` with atomic min/max. Mirrors `dirt_cpu::fill_depth`.
 
-use crate::{BuildParams, Gpu, GpuError, bind_buffers, storage_init};
+use crate::chunked::Chunked;
+use crate::{BuildParams, Gpu, GpuError, bind_buffers, storage_init, with};
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF};
 
 /// The Hi-Z buffer, every cell `[enc(+inf), enc(-inf)]` (empty).
@@ -86,7 +87,7 @@ pub(crate) fn record_coverage(
 
 pub(crate) fn fill_depth(
     gpu: &Gpu,
-    tris: &wgpu::Buffer,
+    tris: &Chunked,
     views: &wgpu::Buffer,
     build_uniform: &wgpu::Buffer,
     hiz: &wgpu::Buffer,
@@ -101,7 +102,10 @@ pub(crate) fn fill_depth(
         gpu,
         "fill_depth",
         &p.get_bind_group_layout(0),
-        &[(0, tris), (1, views), (2, build_uniform), (3, hiz)],
+        &with(
+            &[(1, views), (2, build_uniform), (3, hiz)],
+            tris.bindings(gpu),
+        ),
     );
     draw_coverage(gpu, p, &bind, build, content);
     gpu.wait()

@@ -4,12 +4,13 @@
 //! lists filled through atomic cursors (raster `fill`). Nothing is ever
 //! dropped: the ids (split across bindings, see `ids.wgsl`) hold as many as
 //! the count says, or the build fails before filling with
-//! [`GpuError::IdsTooLarge`]. Mirrors `dirt_cpu::fill_primitives`.
+//! [`GpuError::SplitTooLarge`]. Mirrors `dirt_cpu::fill_primitives`.
 
+use crate::chunked::{Chunked, Kind};
 use crate::fill_depth::draw_coverage;
-use crate::ids::Ids;
 use crate::{
     BuildParams, Gpu, GpuError, ScanParams, bind_buffers, read_back, storage_init, uniform_init,
+    with,
 };
 
 const SCAN_BLOCK: u64 = 256;
@@ -116,14 +117,14 @@ fn scan(gpu: &Gpu, data: &wgpu::Buffer, n: u64) -> Result<(), GpuError> {
 /// Returns (offsets, ids, node count).
 pub(crate) fn fill_primitives(
     gpu: &Gpu,
-    tris: &wgpu::Buffer,
+    tris: &Chunked,
     views: &wgpu::Buffer,
     build_uniform: &wgpu::Buffer,
     hiz: &wgpu::Buffer,
     build: &BuildParams,
     content: &[u32],
     n_lists: u64,
-) -> Result<(wgpu::Buffer, Ids, u32), GpuError> {
+) -> Result<(wgpu::Buffer, Chunked, u32), GpuError> {
     // Counts, then (after the scan) offsets; one extra zero so offsets[n_lists] is the total.
     let lists = storage_init(
         gpu,
@@ -137,19 +138,16 @@ pub(crate) fn fill_primitives(
             gpu,
             "fill_primitives",
             &p.get_bind_group_layout(0),
-            &[
-                (0, tris),
-                (1, views),
-                (2, build_uniform),
-                (3, hiz),
-                (4, &lists),
-            ],
+            &with(
+                &[(1, views), (2, build_uniform), (3, hiz), (4, &lists)],
+                tris.bindings(gpu),
+            ),
         );
         draw_coverage(gpu, p, &bind, build, content);
     }
     scan(gpu, &lists, n_lists + 1)?;
     let total = bytemuck::pod_read_unaligned::<u32>(&read_back(gpu, &lists, n_lists * 4, 4)?);
-    let ids = Ids::new(gpu, total as u64)?;
+    let ids = Chunked::new(gpu, Kind::Ids, total as u64)?;
     if total > 0 {
         let cursors = storage_init(
             gpu,
@@ -161,13 +159,10 @@ pub(crate) fn fill_primitives(
         enc.copy_buffer_to_buffer(&lists, 0, &cursors, 0, (n_lists + 1) * 4);
         gpu.submit(enc);
         let p = &gpu.pipelines.fill;
-        let mut buffers = vec![
-            (0, tris),
-            (1, views),
-            (2, build_uniform),
-            (3, hiz),
-            (4, &cursors),
-        ];
+        let mut buffers = with(
+            &[(1, views), (2, build_uniform), (3, hiz), (4, &cursors)],
+            tris.bindings(gpu),
+        );
         buffers.extend(ids.bindings(gpu));
         let bind = bind_buffers(
             gpu,

@@ -26,12 +26,12 @@
 //! owns its buffers; the caller owns the meshes, rays and hits, and must keep
 //! them alive until the submission completes (wgpu does this for it).
 
+use crate::chunked::{Chunked, Kind};
 use crate::fill_depth::{record_coverage, tile_target};
 use crate::fill_primitives::{Scan, grid};
 use crate::gather::GpuMesh;
-use crate::ids::Ids;
 use crate::mip_depth::MipDepth;
-use crate::{BuildParams, FrameState, Gpu, GpuAds, GpuError, ViewsParams, bind_buffers};
+use crate::{BuildParams, FrameState, Gpu, GpuAds, GpuError, ViewsParams, bind_buffers, with};
 use dirt_core::{AdsParams, BuildTimings, CoreError};
 use dirt_math::ViewsKind;
 use dirt_math::dda::{hiz_levels, hiz_width};
@@ -148,7 +148,7 @@ impl GpuAds {
             STORAGE | COPY_SRC | COPY_DST,
         );
         let cursors = buffer(gpu, "cursors", (n_lists + 1) * 4, STORAGE | COPY_DST);
-        let ids = Ids::new(gpu, capacity)?;
+        let ids = Chunked::new(gpu, Kind::Ids, capacity)?;
         let uniform = wgpu::BufferUsages::UNIFORM | COPY_DST;
         let frame = Frame {
             state: buffer(
@@ -189,7 +189,7 @@ impl GpuAds {
             timings: BuildTimings::default(),
             n_views,
             n_slots: n_views,
-            tris: buffer(gpu, "triangles", 16, STORAGE),
+            tris: Chunked::new(gpu, Kind::Tris, 0)?,
             views_uniform,
             hiz,
             offsets,
@@ -251,7 +251,9 @@ impl GpuAds {
                 ))
             })?;
         }
-        crate::check_binding(gpu, "triangles", n_tris as u64 * 36)?;
+        if n_tris as u64 > self.tris.capacity() {
+            self.tris = Chunked::new(gpu, Kind::Tris, n_tris as u64)?;
+        }
         // Grow what the latest completed build (or this one's count) says is too small.
         let needed = frame.shared.needed.load(Ordering::Acquire);
         if needed > self.ids.capacity() {
@@ -259,11 +261,8 @@ impl GpuAds {
             // count itself must fit, or the build is refused by name.
             let limit = gpu.binding_limits().id_capacity();
             let capacity = (needed + needed / 4).min(limit.max(needed));
-            self.ids = Ids::new(gpu, capacity)?;
+            self.ids = Chunked::new(gpu, Kind::Ids, capacity)?;
             frame.grown += 1;
-        }
-        if n_tris as u64 * 36 > self.tris.size() {
-            self.tris = buffer(gpu, "triangles", n_tris as u64 * 36, STORAGE);
         }
         let tiles = self.params.tiles();
         let build = BuildParams {
@@ -272,6 +271,7 @@ impl GpuAds {
             tiles,
             buckets: self.params.buckets,
             id_shift: self.ids.shift(),
+            tri_shift: self.tris.shift(),
             ..Default::default()
         };
         gpu.queue
@@ -284,6 +284,7 @@ impl GpuAds {
                 ViewsKind::Single => 1,
             },
             has_center: center.is_some() as u32,
+            tri_shift: self.tris.shift(),
             center: center.map_or([0.0; 3], |c| c.to_array()),
             ..Default::default()
         };
@@ -302,8 +303,11 @@ impl GpuAds {
         enc.clear_buffer(&self.offsets, 0, None);
         let mut first = 0u32;
         for (m, uniform) in meshes.iter().zip(&frame.gather_params) {
-            gpu.queue
-                .write_buffer(uniform, 0, bytemuck::bytes_of(&m.params(first)));
+            gpu.queue.write_buffer(
+                uniform,
+                0,
+                bytemuck::bytes_of(&m.params(first, self.tris.shift())),
+            );
             crate::gather::record(gpu, enc, m, uniform, &self.tris);
             first += m.layout.triangles;
         }
@@ -334,12 +338,14 @@ impl GpuAds {
                 gpu,
                 "fill_depth",
                 &fd.get_bind_group_layout(0),
-                &[
-                    (0, &self.tris),
-                    (1, &self.views_uniform),
-                    (2, &frame.build_params),
-                    (3, &self.hiz),
-                ],
+                &with(
+                    &[
+                        (1, &self.views_uniform),
+                        (2, &frame.build_params),
+                        (3, &self.hiz),
+                    ],
+                    self.tris.bindings(gpu),
+                ),
             );
             record_coverage(enc, &frame.target, fd, &bind, n_tris, 0..self.n_views);
         }
@@ -350,13 +356,15 @@ impl GpuAds {
                 gpu,
                 "fill_primitives count",
                 &count.get_bind_group_layout(0),
-                &[
-                    (0, &self.tris),
-                    (1, &self.views_uniform),
-                    (2, &frame.build_params),
-                    (3, &self.hiz),
-                    (4, &self.offsets),
-                ],
+                &with(
+                    &[
+                        (1, &self.views_uniform),
+                        (2, &frame.build_params),
+                        (3, &self.hiz),
+                        (4, &self.offsets),
+                    ],
+                    self.tris.bindings(gpu),
+                ),
             );
             record_coverage(enc, &frame.target, count, &bind, n_tris, 0..self.n_views);
         }
@@ -365,13 +373,15 @@ impl GpuAds {
             let bytes = (frame.n_lists + 1) * 4;
             enc.copy_buffer_to_buffer(&self.offsets, 0, &frame.cursors, 0, bytes);
             let fill = &gpu.pipelines.fill;
-            let mut buffers = vec![
-                (0, &self.tris),
-                (1, &self.views_uniform),
-                (2, &frame.build_params),
-                (3, &self.hiz),
-                (4, &frame.cursors),
-            ];
+            let mut buffers = with(
+                &[
+                    (1, &self.views_uniform),
+                    (2, &frame.build_params),
+                    (3, &self.hiz),
+                    (4, &frame.cursors),
+                ],
+                self.tris.bindings(gpu),
+            );
             buffers.extend(self.ids.bindings(gpu));
             let bind = bind_buffers(
                 gpu,

@@ -3,6 +3,7 @@
 //! transform ([`dirt_core::gather::MeshLayout`]) — into the structure's
 //! triangle buffer, one thread per triangle. Mirrors `dirt_core::gather`.
 
+use crate::chunked::Chunked;
 use crate::fill_primitives::grid;
 use crate::{GatherParams, Gpu, GpuError};
 use dirt_core::gather::{IndexFormat, MeshLayout};
@@ -54,7 +55,7 @@ impl GpuMesh<'_> {
             .map_err(GpuError::Params)
     }
 
-    pub(crate) fn params(&self, first_tri: u32) -> GatherParams {
+    pub(crate) fn params(&self, first_tri: u32, tri_shift: u32) -> GatherParams {
         let l = &self.layout;
         GatherParams {
             first_tri,
@@ -68,7 +69,7 @@ impl GpuMesh<'_> {
             },
             first_index: l.first_index,
             has_transform: l.transform.is_some() as u32,
-            _pad: 0,
+            tri_shift,
             rows: l.transform.unwrap_or_default(),
         }
     }
@@ -91,19 +92,27 @@ pub(crate) fn record(
     enc: &mut wgpu::CommandEncoder,
     mesh: &GpuMesh<'_>,
     uniform: &wgpu::Buffer,
-    tris: &wgpu::Buffer,
+    tris: &Chunked,
 ) {
     if mesh.layout.triangles == 0 {
         return;
     }
     let p = &gpu.pipelines.gather;
-    let entries = [
+    let mut entries: Vec<wgpu::BindGroupEntry<'_>> = [
         (0, words(mesh.vertices)),
         (1, words(mesh.indices.unwrap_or(mesh.vertices))),
-        (2, tris.as_entire_binding()),
         (3, uniform.as_entire_binding()),
     ]
-    .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource });
+    .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
+    .into();
+    entries.extend(
+        tris.bindings(gpu)
+            .into_iter()
+            .map(|(binding, buf)| wgpu::BindGroupEntry {
+                binding,
+                resource: buf.as_entire_binding(),
+            }),
+    );
     let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("gather"),
         layout: &p.get_bind_group_layout(0),

@@ -35,12 +35,12 @@
 //! the CPU (only the exact path on llvmpipe). A skip says which test, which
 //! adapter and why; `DIRT_REQUIRE_GPU=1` (CI) makes it a failure.
 
+mod chunked;
 mod context;
 pub mod fill_depth;
 pub mod fill_primitives;
 pub mod frame;
 pub mod gather;
-mod ids;
 pub mod mip_depth;
 pub mod params;
 pub mod selftest;
@@ -97,12 +97,14 @@ pub enum GpuError {
         bytes: u64,
         limit: u64,
     },
-    /// The list ids need more than the device binds, split across
-    /// [`Gpu::id_bindings`] bindings (see [`dirt_core::BindingLimits`]).
+    /// The list ids or the triangles need more than the device binds, split
+    /// across [`Gpu::id_bindings`] or [`Gpu::tri_bindings`] bindings (see
+    /// [`dirt_core::BindingLimits`]).
     #[error(
-        "the list ids need {bytes} bytes; this device binds at most {bindings} × {per_binding} bytes of them (max_storage_buffers_per_shader_stage, max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene"
+        "{what} need {bytes} bytes; this device binds at most {bindings} × {per_binding} bytes of them (max_storage_buffers_per_shader_stage, max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene"
     )]
-    IdsTooLarge {
+    SplitTooLarge {
+        what: &'static str,
         bytes: u64,
         bindings: u32,
         per_binding: u64,
@@ -214,19 +216,19 @@ pub(crate) fn compute_sharing(
 }
 
 impl Pipelines {
-    /// The pipelines of every stage; the list ids split across `id_chunks` bindings.
+    /// The pipelines of every stage; the list ids and the triangles split as `chunks` says.
     pub(crate) fn new(
         device: &wgpu::Device,
         passthrough: bool,
-        id_chunks: u32,
+        chunks: dirt_shaders::Chunks,
     ) -> Result<Pipelines, GpuError> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let fd = spirv::compile(device, "fill_depth", passthrough, id_chunks)?;
-        let md = spirv::compile(device, "mip_depth", passthrough, id_chunks)?;
-        let fp = spirv::compile(device, "fill_primitives", passthrough, id_chunks)?;
-        let tr = spirv::compile(device, "trace", passthrough, id_chunks)?;
-        let vw = spirv::compile(device, "views", passthrough, id_chunks)?;
-        let ga = spirv::compile(device, "gather", passthrough, id_chunks)?;
+        let fd = spirv::compile(device, "fill_depth", passthrough, chunks)?;
+        let md = spirv::compile(device, "mip_depth", passthrough, chunks)?;
+        let fp = spirv::compile(device, "fill_primitives", passthrough, chunks)?;
+        let tr = spirv::compile(device, "trace", passthrough, chunks)?;
+        let vw = spirv::compile(device, "views", passthrough, chunks)?;
+        let ga = spirv::compile(device, "gather", passthrough, chunks)?;
         let views: [wgpu::ComputePipeline; 4] = compute_sharing(
             device,
             &vw,
@@ -287,14 +289,15 @@ pub struct GpuAds {
     /// with content for [`GpuAds::build`]; every view for a frame structure).
     pub(crate) n_views: u32,
     pub(crate) n_slots: u32,
-    pub(crate) tris: wgpu::Buffer,
+    /// The triangles, split across bindings ([`chunked`]).
+    pub(crate) tris: chunked::Chunked,
     pub(crate) views_uniform: wgpu::Buffer,
     /// All Hi-Z levels, level 0 (the depth bounds) first; two u32 per cell.
     pub(crate) hiz: wgpu::Buffer,
     /// `slots·tiles²·B + 1` offsets after the scan (views without content have none).
     pub(crate) offsets: wgpu::Buffer,
-    /// The list ids, split across bindings ([`ids`]).
-    pub(crate) ids: ids::Ids,
+    /// The list ids, split across bindings ([`chunked`]).
+    pub(crate) ids: chunked::Chunked,
     /// The kept parts of a frame structure ([`GpuAds::frame`]).
     pub(crate) frame: Option<Box<frame::Frame>>,
 }
@@ -365,6 +368,16 @@ pub(crate) fn buffer_init(
         gpu.queue.write_buffer(&buf, 0, &padded);
     }
     buf
+}
+
+/// `fixed` and then the split array's `chunks`: the `(binding, buffer)` pairs of a bind group.
+pub(crate) fn with<'a>(
+    fixed: &[(u32, &'a wgpu::Buffer)],
+    chunks: Vec<(u32, &'a wgpu::Buffer)>,
+) -> Vec<(u32, &'a wgpu::Buffer)> {
+    let mut out = fixed.to_vec();
+    out.extend(chunks);
+    out
 }
 
 /// A bind group of whole buffers for group 0 of `layout`: `(binding, buffer)` pairs.
@@ -481,8 +494,9 @@ impl GpuAds {
         let n_tris = u32::try_from(tris.len()).map_err(|_| {
             CoreError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len()))
         })?;
-        // Everything that must fit one binding is checked before any work starts.
-        check_binding(gpu, "triangles", tris.len() as u64 * 36)?;
+        // Everything that must fit its bindings is checked before any work starts.
+        let tri_buf =
+            chunked::Chunked::with_data(gpu, chunked::Kind::Tris, bytemuck::cast_slice(tris))?;
         let levels = hiz_levels(tiles);
         let cells: u64 = (0..levels)
             .map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_slots as u64)
@@ -491,12 +505,6 @@ impl GpuAds {
         let n_lists = n_slots as u64 * (tiles as u64).pow(2) * params.buckets as u64;
         check_binding(gpu, "list offsets", (n_lists + 1) * 4)?;
 
-        let tri_buf = storage_init(
-            gpu,
-            "triangles",
-            bytemuck::cast_slice(tris),
-            wgpu::BufferUsages::empty(),
-        );
         let views_uniform = uniform_init(gpu, "views", bytemuck::cast_slice(&views_gpu(&views)));
         let build = BuildParams {
             n_tris,
@@ -504,6 +512,7 @@ impl GpuAds {
             tiles,
             buckets: params.buckets,
             id_shift: gpu.binding_limits().id_shift(),
+            tri_shift: tri_buf.shift(),
             ..Default::default()
         };
         let build_uniform = uniform_init(gpu, "build params", bytemuck::bytes_of(&build));
@@ -559,6 +568,11 @@ impl GpuAds {
         self.ids.chunks()
     }
 
+    /// Buffers the triangles take (one per binding they need; see [`Gpu::tri_bindings`]).
+    pub fn tri_chunks(&self) -> usize {
+        self.tris.chunks()
+    }
+
     /// Bytes of the structure on the GPU: the Hi-Z pyramid (depth bounds
     /// included), list offsets and ids, as allocated.
     pub fn memory_bytes(&self) -> u64 {
@@ -605,7 +619,7 @@ impl GpuAds {
                 limit: self.ids.capacity() * 4,
             });
         }
-        let ids = self.ids.read(gpu, total)?;
+        let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&self.ids.read(gpu, total)?);
         Ok(IdLists { offsets, ids })
     }
 }

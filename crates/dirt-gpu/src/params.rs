@@ -13,7 +13,8 @@ pub struct BuildParams {
     pub buckets: u32,
     /// List ids per chunk: `2^id_shift` ([`dirt_core::BindingLimits::id_shift`]).
     pub id_shift: u32,
-    pub _pad0: u32,
+    /// Triangles per chunk: `2^tri_shift` ([`dirt_core::BindingLimits::tri_shift`]).
+    pub tri_shift: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }
@@ -38,7 +39,7 @@ pub struct ScanParams {
     pub _pad2: u32,
 }
 
-/// `struct TraceParams` of `trace.wgsl`. repr(C), Pod, 48 bytes.
+/// `struct TraceParams` of `trace.wgsl`. repr(C), Pod, 64 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Pod, Zeroable)]
 pub struct TraceParams {
@@ -61,6 +62,11 @@ pub struct TraceParams {
     pub id_shift: u32,
     /// List ids the chunks hold: a larger scan total means the lists did not fit.
     pub id_capacity: u32,
+    /// Triangles per chunk: `2^tri_shift` ([`dirt_core::BindingLimits::tri_shift`]).
+    pub tri_shift: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// `struct PoolHeader` of `trace.wgsl`: the head of the continuation pool.
@@ -87,7 +93,8 @@ pub struct ViewsParams {
     pub kind: u32,
     /// 1: `center` is given ([`dirt_core::AdsParams::center`]).
     pub has_center: u32,
-    pub _pad0: u32,
+    /// Triangles per chunk: `2^tri_shift`.
+    pub tri_shift: u32,
     pub center: [f32; 3],
     pub _pad1: u32,
 }
@@ -119,7 +126,8 @@ pub struct GatherParams {
     pub index_format: u32,
     pub first_index: u32,
     pub has_transform: u32,
-    pub _pad: u32,
+    /// Triangles per output chunk: `2^tri_shift`.
+    pub tri_shift: u32,
     /// [`dirt_core::gather::Affine`], row-major.
     pub rows: [[f32; 4]; 3],
 }

@@ -12,7 +12,12 @@ pub fn run(
     cases: u32,
     out_words: usize,
 ) -> Result<Vec<u32>, GpuError> {
-    let st = crate::spirv::compile(&gpu.device, "selftest_math", gpu.exact, 1)?;
+    let st = crate::spirv::compile(
+        &gpu.device,
+        "selftest_math",
+        gpu.exact,
+        dirt_shaders::Chunks::ONE,
+    )?;
     let p = crate::compute(&gpu.device, &st, entry)?;
     let inb = storage_init(
         gpu,

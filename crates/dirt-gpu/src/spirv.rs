@@ -92,13 +92,12 @@ pub fn decorate_no_contraction(words: &mut Vec<u32>) -> Result<usize, String> {
 
 fn parse(
     stage: &'static str,
-    id_chunks: u32,
+    chunks: dirt_shaders::Chunks,
 ) -> Result<(naga::Module, ModuleInfo, String), GpuError> {
-    let composed =
-        dirt_shaders::compose_with_ids(stage, id_chunks).map_err(|e| GpuError::Shader {
-            stage,
-            message: e.to_string(),
-        })?;
+    let composed = dirt_shaders::compose_chunked(stage, chunks).map_err(|e| GpuError::Shader {
+        stage,
+        message: e.to_string(),
+    })?;
     let module = naga::front::wgsl::parse_str(&composed.text).map_err(|e| GpuError::Shader {
         stage,
         message: e.emit_to_string(&composed.text),
@@ -118,9 +117,9 @@ pub(crate) fn compile(
     device: &wgpu::Device,
     stage: &'static str,
     passthrough: bool,
-    id_chunks: u32,
+    chunks: dirt_shaders::Chunks,
 ) -> Result<Stage, GpuError> {
-    let (module, info, text) = parse(stage, id_chunks)?;
+    let (module, info, text) = parse(stage, chunks)?;
     let wgsl = (!passthrough).then(|| {
         device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(stage),
@@ -320,7 +319,7 @@ mod tests {
 
     #[test]
     fn decorates_every_float_op() {
-        let (module, info, _) = parse("trace", 1).expect("trace parses");
+        let (module, info, _) = parse("trace", dirt_shaders::Chunks::ONE).expect("trace parses");
         let mut words =
             naga::back::spv::write_vec(&module, &info, &naga::back::spv::Options::default(), None)
                 .expect("spv");

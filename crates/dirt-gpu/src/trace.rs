@@ -304,6 +304,8 @@ impl TraceResources {
             with_stats: stats.is_some() as u32,
             id_shift: ads.ids.shift(),
             id_capacity: ads.ids.capacity().min(u32::MAX as u64) as u32,
+            tri_shift: ads.tris.shift(),
+            ..Default::default()
         };
         let uniform = self
             .params
@@ -317,7 +319,6 @@ impl TraceResources {
         let mut entries: Vec<wgpu::BindGroupEntry<'_>> = [
             (0, binding(rays, n * 32)),
             (1, binding(hits, n * 16)),
-            (2, ads.tris.as_entire_binding()),
             (3, ads.views_uniform.as_entire_binding()),
             (4, uniform.as_entire_binding()),
             (5, ads.hiz.as_entire_binding()),
@@ -327,11 +328,14 @@ impl TraceResources {
         ]
         .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
         .into();
-        entries.extend(ads.ids.bindings(gpu).into_iter().map(|(binding, buf)| {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buf.as_entire_binding(),
-            }
+        let chunks = ads
+            .ids
+            .bindings(gpu)
+            .into_iter()
+            .chain(ads.tris.bindings(gpu));
+        entries.extend(chunks.map(|(binding, buf)| wgpu::BindGroupEntry {
+            binding,
+            resource: buf.as_entire_binding(),
         }));
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace"),

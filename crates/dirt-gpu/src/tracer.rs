@@ -99,29 +99,40 @@ impl<'g> DirtGpu<'g> {
     /// wrapper of a frame build. Its one stage, `frame`, is the wall time of
     /// every submission it took (two when the lists outgrew the ids).
     fn build_in_frame(&mut self, tris: &[Triangle]) -> Result<BuildReport, GpuError> {
-        let n = u32::try_from(tris.len()).map_err(|_| {
+        u32::try_from(tris.len()).map_err(|_| {
             GpuError::Params(CoreError::InvalidParams(format!(
                 "{} triangles is more than 2^32-1",
                 tris.len()
             )))
         })?;
         let gpu = self.gpu;
-        let upload = crate::buffer_init(
-            gpu,
-            "triangles upload",
-            bytemuck::cast_slice(tris),
-            wgpu::BufferUsages::STORAGE,
-        );
-        let mesh = crate::GpuMesh {
-            vertices: &upload,
-            indices: None,
-            layout: dirt_core::gather::MeshLayout::triangles(n),
-        };
+        // One mesh per binding's worth: gather binds each vertex buffer whole.
+        let per = (1usize << gpu.binding_limits().tri_shift()).max(1);
+        let uploads: Vec<(wgpu::Buffer, u32)> = tris
+            .chunks(per)
+            .map(|part| {
+                let buf = crate::buffer_init(
+                    gpu,
+                    "triangles upload",
+                    bytemuck::cast_slice(part),
+                    wgpu::BufferUsages::STORAGE,
+                );
+                (buf, part.len() as u32)
+            })
+            .collect();
+        let meshes: Vec<crate::GpuMesh<'_>> = uploads
+            .iter()
+            .map(|(buf, count)| crate::GpuMesh {
+                vertices: buf,
+                indices: None,
+                layout: dirt_core::gather::MeshLayout::triangles(*count),
+            })
+            .collect();
         let t0 = std::time::Instant::now();
         // A build whose lists outgrew the ids grows them for the next: at most one more.
         for _ in 0..3 {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
-            self.encode_build(&mut enc, &[mesh])?;
+            self.encode_build(&mut enc, &meshes)?;
             gpu.submit(enc);
             gpu.wait()?;
             let Some(ads) = self.ads.as_ref() else { break };

@@ -7,8 +7,9 @@
 //! does not wait to learn which views have content, so every view's block is
 //! allocated.
 
+use crate::chunked::Chunked;
 use crate::fill_primitives::grid;
-use crate::{Gpu, bind_buffers, record_dispatch};
+use crate::{Gpu, bind_buffers, record_dispatch, with};
 use dirt_math::{Aabb, Vec3, ViewGpu, ViewSet, ViewsKind};
 
 /// The views buffer before the first build: each view's axes, tan, tiles,
@@ -31,7 +32,7 @@ pub(crate) fn template(kind: ViewsKind, tiles: u32) -> [ViewGpu; 6] {
 pub(crate) fn record(
     gpu: &Gpu,
     enc: &mut wgpu::CommandEncoder,
-    tris: &wgpu::Buffer,
+    tris: &Chunked,
     views: &wgpu::Buffer,
     state: &wgpu::Buffer,
     params: &wgpu::Buffer,
@@ -43,7 +44,7 @@ pub(crate) fn record(
         gpu,
         "views",
         &bounds.get_bind_group_layout(0),
-        &[(0, tris), (1, views), (2, state), (3, params)],
+        &with(&[(1, views), (2, state), (3, params)], tris.bindings(gpu)),
     );
     let (x, y) = grid(gpu, (n_tris as u64).div_ceil(64));
     // (pipeline, workgroups, one thread per triangle): those have nothing to do without triangles.
