@@ -123,11 +123,18 @@ impl Chunked {
         self.chunks.iter().map(|b| b.size()).sum()
     }
 
-    /// `(binding, buffer)` for every binding of the kind the pipelines declare.
-    pub(crate) fn bindings(&self, gpu: &Gpu) -> Vec<(u32, &wgpu::Buffer)> {
+    /// Whether this array takes more than one binding.
+    pub(crate) fn is_split(&self) -> bool {
+        self.chunks.len() > 1
+    }
+
+    /// `(binding, buffer)` for every binding of the kind the pipelines of
+    /// [`Gpu::pipelines_for`]`(split)` declare.
+    pub(crate) fn bindings(&self, gpu: &Gpu, split: bool) -> Vec<(u32, &wgpu::Buffer)> {
+        let counts = gpu.chunk_bindings(split);
         let (first, n) = match self.kind {
-            Kind::Ids => (dirt_shaders::ID_BINDING, gpu.id_bindings()),
-            Kind::Tris => (dirt_shaders::TRI_BINDING, gpu.tri_bindings()),
+            Kind::Ids => (dirt_shaders::ID_BINDING, counts.ids),
+            Kind::Tris => (dirt_shaders::TRI_BINDING, counts.tris),
         };
         (0..n)
             .map(|c| {

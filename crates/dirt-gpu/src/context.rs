@@ -47,7 +47,12 @@ pub struct Gpu {
     pub exact: bool,
     /// Why [`Gpu::exact`] is what it is, in words.
     pub exactness: &'static str,
+    /// The pipelines with one binding per split array: what every structure
+    /// that fits them uses.
     pub(crate) pipelines: crate::Pipelines,
+    /// The pipelines with the device's bindings per split array, compiled the
+    /// first time a structure needs more than one ([`Gpu::pipelines_for`]).
+    split: std::sync::OnceLock<Result<crate::Pipelines, String>>,
     /// Bindings the list ids are split across (see [`Gpu::id_bindings`]).
     id_bindings: u32,
     /// Bindings the triangles are split across (see [`Gpu::tri_bindings`]).
@@ -184,7 +189,8 @@ impl Gpu {
 
     /// dirt on the application's device and queue. Features and limits are
     /// read from the device; the exact path is decided by [`exact_path`]; the
-    /// pipelines are compiled here, once. The device and queue are shared
+    /// pipelines are compiled here, once (those for triangles or ids split
+    /// across several bindings when a structure first needs them). The device and queue are shared
     /// (wgpu's handles are reference counted), not copied.
     pub fn from_device(
         device: &wgpu::Device,
@@ -204,11 +210,7 @@ impl Gpu {
         let extra = limits.max_storage_buffers_per_shader_stage - STORAGE_BUFFERS_PER_STAGE;
         let id_bindings = 1 + extra.min(dirt_shaders::MAX_CHUNKS - 1);
         let tri_bindings = 1 + (extra - (id_bindings - 1)).min(dirt_shaders::MAX_CHUNKS - 1);
-        let chunks = dirt_shaders::Chunks {
-            ids: id_bindings,
-            tris: tri_bindings,
-        };
-        let pipelines = crate::Pipelines::new(device, exact, chunks)?;
+        let pipelines = crate::Pipelines::new(device, exact, dirt_shaders::Chunks::ONE)?;
         Ok(Gpu {
             device: device.clone(),
             queue: queue.clone(),
@@ -217,12 +219,48 @@ impl Gpu {
             exact,
             exactness,
             pipelines,
+            split: std::sync::OnceLock::new(),
             id_bindings,
             tri_bindings,
             submits: Default::default(),
             waits: Default::default(),
             lost: Default::default(),
         })
+    }
+
+    /// The pipelines for passes over split arrays: with one binding each when
+    /// none of them is split (`split` false), else with the device's bindings,
+    /// compiled on first use. A scene pays for the chunk switch in its shaders
+    /// only when it needs it.
+    pub(crate) fn pipelines_for(&self, split: bool) -> Result<&crate::Pipelines, GpuError> {
+        if !split {
+            return Ok(&self.pipelines);
+        }
+        let chunks = dirt_shaders::Chunks {
+            ids: self.id_bindings,
+            tris: self.tri_bindings,
+        };
+        self.split
+            .get_or_init(|| {
+                crate::Pipelines::new(&self.device, self.exact, chunks).map_err(|e| e.to_string())
+            })
+            .as_ref()
+            .map_err(|e| GpuError::Shader {
+                stage: "pipelines (split bindings)",
+                message: e.clone(),
+            })
+    }
+
+    /// Bindings a pass declares per split array: one, or the device's.
+    pub(crate) fn chunk_bindings(&self, split: bool) -> dirt_shaders::Chunks {
+        if split {
+            dirt_shaders::Chunks {
+                ids: self.id_bindings,
+                tris: self.tri_bindings,
+            }
+        } else {
+            dirt_shaders::Chunks::ONE
+        }
     }
 
     /// The adapter in words, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`.
@@ -235,7 +273,7 @@ impl Gpu {
 
     /// Bindings the list ids are split across: one, and one more per storage
     /// buffer the device allows per stage beyond [`STORAGE_BUFFERS_PER_STAGE`],
-    /// up to [`dirt_shaders::MAX_CHUNKS`]. Fixed when the pipelines are compiled.
+    /// up to [`dirt_shaders::MAX_CHUNKS`]. Fixed when the device is opened.
     pub fn id_bindings(&self) -> u32 {
         self.id_bindings
     }

@@ -97,14 +97,15 @@ pub(crate) fn fill_depth(
     if build.n_tris == 0 {
         return Ok(());
     }
-    let p = &gpu.pipelines.fill_depth;
+    let split = tris.is_split();
+    let p = &gpu.pipelines_for(split)?.fill_depth;
     let bind = bind_buffers(
         gpu,
         "fill_depth",
         &p.get_bind_group_layout(0),
         &with(
             &[(1, views), (2, build_uniform), (3, hiz)],
-            tris.bindings(gpu),
+            tris.bindings(gpu, split),
         ),
     );
     draw_coverage(gpu, p, &bind, build, content);

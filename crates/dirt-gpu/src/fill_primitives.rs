@@ -133,14 +133,15 @@ pub(crate) fn fill_primitives(
         wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
     );
     if build.n_tris > 0 {
-        let p = &gpu.pipelines.count;
+        let split = tris.is_split();
+        let p = &gpu.pipelines_for(split)?.count;
         let bind = bind_buffers(
             gpu,
             "fill_primitives",
             &p.get_bind_group_layout(0),
             &with(
                 &[(1, views), (2, build_uniform), (3, hiz), (4, &lists)],
-                tris.bindings(gpu),
+                tris.bindings(gpu, split),
             ),
         );
         draw_coverage(gpu, p, &bind, build, content);
@@ -158,12 +159,13 @@ pub(crate) fn fill_primitives(
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.copy_buffer_to_buffer(&lists, 0, &cursors, 0, (n_lists + 1) * 4);
         gpu.submit(enc);
-        let p = &gpu.pipelines.fill;
+        let split = tris.is_split() || ids.is_split();
+        let p = &gpu.pipelines_for(split)?.fill;
         let mut buffers = with(
             &[(1, views), (2, build_uniform), (3, hiz), (4, &cursors)],
-            tris.bindings(gpu),
+            tris.bindings(gpu, split),
         );
-        buffers.extend(ids.bindings(gpu));
+        buffers.extend(ids.bindings(gpu, split));
         let bind = bind_buffers(
             gpu,
             "fill_primitives",

@@ -299,6 +299,14 @@ impl GpuAds {
             ));
         }
 
+        // The pipelines for this structure's bindings, compiled if need be
+        // before anything is recorded: passes over the triangles, and over
+        // the triangles and the ids.
+        let tris_split = self.tris.is_split();
+        let all_split = tris_split || self.ids.is_split();
+        let pt = gpu.pipelines_for(tris_split)?;
+        let pa = gpu.pipelines_for(all_split)?;
+
         enc.clear_buffer(&frame.state, 0, None);
         enc.clear_buffer(&self.offsets, 0, None);
         let mut first = 0u32;
@@ -308,11 +316,12 @@ impl GpuAds {
                 0,
                 bytemuck::bytes_of(&m.params(first, self.tris.shift())),
             );
-            crate::gather::record(gpu, enc, m, uniform, &self.tris);
+            crate::gather::record(gpu, pt, enc, m, uniform, &self.tris);
             first += m.layout.triangles;
         }
         crate::views::record(
             gpu,
+            pt,
             enc,
             &self.tris,
             &self.views_uniform,
@@ -333,7 +342,7 @@ impl GpuAds {
             crate::record_dispatch(enc, "clear_depth", p, &bind, [x, y, 1]);
         }
         if n_tris > 0 {
-            let fd = &gpu.pipelines.fill_depth;
+            let fd = &pt.fill_depth;
             let bind = bind_buffers(
                 gpu,
                 "fill_depth",
@@ -344,14 +353,14 @@ impl GpuAds {
                         (2, &frame.build_params),
                         (3, &self.hiz),
                     ],
-                    self.tris.bindings(gpu),
+                    self.tris.bindings(gpu, tris_split),
                 ),
             );
             record_coverage(enc, &frame.target, fd, &bind, n_tris, 0..self.n_views);
         }
         frame.mip.record(gpu, enc);
         if n_tris > 0 {
-            let count = &gpu.pipelines.count;
+            let count = &pt.count;
             let bind = bind_buffers(
                 gpu,
                 "fill_primitives count",
@@ -363,7 +372,7 @@ impl GpuAds {
                         (3, &self.hiz),
                         (4, &self.offsets),
                     ],
-                    self.tris.bindings(gpu),
+                    self.tris.bindings(gpu, tris_split),
                 ),
             );
             record_coverage(enc, &frame.target, count, &bind, n_tris, 0..self.n_views);
@@ -372,7 +381,7 @@ impl GpuAds {
         if n_tris > 0 {
             let bytes = (frame.n_lists + 1) * 4;
             enc.copy_buffer_to_buffer(&self.offsets, 0, &frame.cursors, 0, bytes);
-            let fill = &gpu.pipelines.fill;
+            let fill = &pa.fill;
             let mut buffers = with(
                 &[
                     (1, &self.views_uniform),
@@ -380,9 +389,9 @@ impl GpuAds {
                     (3, &self.hiz),
                     (4, &frame.cursors),
                 ],
-                self.tris.bindings(gpu),
+                self.tris.bindings(gpu, all_split),
             );
-            buffers.extend(self.ids.bindings(gpu));
+            buffers.extend(self.ids.bindings(gpu, all_split));
             let bind = bind_buffers(
                 gpu,
                 "fill_primitives fill",

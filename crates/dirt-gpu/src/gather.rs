@@ -86,9 +86,11 @@ fn words(buf: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
 }
 
 /// Records the gather of `mesh` into `tris` from triangle `first_tri`, with
-/// its parameters already written to `uniform`.
+/// its parameters already written to `uniform`; `pipelines` are
+/// [`Gpu::pipelines_for`]`(tris.is_split())`.
 pub(crate) fn record(
     gpu: &Gpu,
+    pipelines: &crate::Pipelines,
     enc: &mut wgpu::CommandEncoder,
     mesh: &GpuMesh<'_>,
     uniform: &wgpu::Buffer,
@@ -97,7 +99,7 @@ pub(crate) fn record(
     if mesh.layout.triangles == 0 {
         return;
     }
-    let p = &gpu.pipelines.gather;
+    let p = &pipelines.gather;
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = [
         (0, words(mesh.vertices)),
         (1, words(mesh.indices.unwrap_or(mesh.vertices))),
@@ -106,7 +108,7 @@ pub(crate) fn record(
     .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
     .into();
     entries.extend(
-        tris.bindings(gpu)
+        tris.bindings(gpu, tris.is_split())
             .into_iter()
             .map(|(binding, buf)| wgpu::BindGroupEntry {
                 binding,

@@ -104,7 +104,8 @@ pub struct TraceResources {
     dispatch: wgpu::Buffer,
     no_stats: wgpu::Buffer,
     params: HashMap<TraceParams, wgpu::Buffer>,
-    bind: Option<wgpu::BindGroup>,
+    /// The last trace's bind group, and whether it is for split bindings.
+    bind: Option<(wgpu::BindGroup, bool)>,
     schedule_bind: Option<wgpu::BindGroup>,
 }
 
@@ -278,6 +279,10 @@ impl TraceResources {
                 ),
             )));
         }
+        // The structure's bindings choose the pipelines (compiled if need
+        // be), before anything is recorded.
+        let split = ads.tris.is_split() || ads.ids.is_split();
+        let pipelines = gpu.pipelines_for(split)?;
         self.ensure_pool(gpu, count)?;
         let Some(pool) = self.pool.clone() else {
             return Err(GpuError::Device("the trace pool was not made".into()));
@@ -330,16 +335,16 @@ impl TraceResources {
         .into();
         let chunks = ads
             .ids
-            .bindings(gpu)
+            .bindings(gpu, split)
             .into_iter()
-            .chain(ads.tris.bindings(gpu));
+            .chain(ads.tris.bindings(gpu, split));
         entries.extend(chunks.map(|(binding, buf)| wgpu::BindGroupEntry {
             binding,
             resource: buf.as_entire_binding(),
         }));
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace"),
-            layout: &gpu.pipelines.trace.get_bind_group_layout(0),
+            layout: &pipelines.trace.get_bind_group_layout(0),
             entries: &entries,
         });
         {
@@ -348,11 +353,11 @@ impl TraceResources {
                 label: Some("trace"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&gpu.pipelines.trace);
+            pass.set_pipeline(&pipelines.trace);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(x, y, 1);
         }
-        self.bind = Some(bind);
+        self.bind = Some((bind, split));
         self.encode_schedule(gpu, enc, &pool);
         self.encode_continue(gpu, enc)
     }
@@ -382,17 +387,19 @@ impl TraceResources {
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
-        let (Some(bind), Some(pool)) = (self.bind.clone(), self.pool.clone()) else {
+        let (Some((bind, split)), Some(pool)) = (self.bind.clone(), self.pool.clone()) else {
             // No trace recorded, or an empty one: nothing is unfinished.
             return Ok(());
         };
+        // Compiled when the trace was recorded: the same pipelines.
+        let pipelines = gpu.pipelines_for(split)?;
         for _ in 0..self.rounds {
             {
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("trace_continue"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&gpu.pipelines.trace_continue);
+                pass.set_pipeline(&pipelines.trace_continue);
                 pass.set_bind_group(0, &bind, &[]);
                 pass.dispatch_workgroups_indirect(&self.dispatch, 0);
             }

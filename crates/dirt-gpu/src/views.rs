@@ -28,9 +28,12 @@ pub(crate) fn template(kind: ViewsKind, tiles: u32) -> [ViewGpu; 6] {
 }
 
 /// Records the four entries over `n_tris` triangles in `tris`: `state` must
-/// be zero (cleared in the same encoder) and `params` written.
+/// be zero (cleared in the same encoder) and `params` written; `pipelines`
+/// are [`Gpu::pipelines_for`]`(tris.is_split())`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn record(
     gpu: &Gpu,
+    pipelines: &crate::Pipelines,
     enc: &mut wgpu::CommandEncoder,
     tris: &Chunked,
     views: &wgpu::Buffer,
@@ -39,12 +42,15 @@ pub(crate) fn record(
     n_tris: u32,
     n_views: u32,
 ) {
-    let [bounds, from_bounds, reach, leave_out] = &gpu.pipelines.views;
+    let [bounds, from_bounds, reach, leave_out] = &pipelines.views;
     let bind = bind_buffers(
         gpu,
         "views",
         &bounds.get_bind_group_layout(0),
-        &with(&[(1, views), (2, state), (3, params)], tris.bindings(gpu)),
+        &with(
+            &[(1, views), (2, state), (3, params)],
+            tris.bindings(gpu, tris.is_split()),
+        ),
     );
     let (x, y) = grid(gpu, (n_tris as u64).div_ceil(64));
     // (pipeline, workgroups, one thread per triangle): those have nothing to do without triangles.
