@@ -1406,6 +1406,68 @@ fn renderer_on_a_scene_of_only_degenerate_triangles() {
     );
 }
 
+/// A second context on the exact path, whose limits a test may lower;
+/// `None` when the test is skipped.
+fn exact_context(test: &str) -> Option<dirt_gpu::Gpu> {
+    let exact = dirt_gpu::testing::exact_gpu(test)?;
+    let g = dirt_gpu::Gpu::new().expect("a second context");
+    assert!(g.exact, "{}", exact.describe());
+    Some(g)
+}
+
+/// Bytes of the larger buffer the GPU binds whole (Hi-Z pyramid, offsets).
+fn bound_whole(cpu: &Ads) -> u64 {
+    let hiz = cpu.hiz.iter().map(|l| l.len() as u64 * 8).sum::<u64>();
+    hiz.max(cpu.lists.offsets.len() as u64 * 4)
+}
+
+/// The trace through `ads` equals the CPU's to the bit, hits and statistics,
+/// with both traversals.
+fn assert_trace_equals_cpu(
+    g: &dirt_gpu::Gpu,
+    ads: &dirt_gpu::GpuAds,
+    cpu: &Ads,
+    tris: &[Triangle],
+    rays: &[Ray],
+) {
+    for trav in [Traversal::Linear, Traversal::HiZ] {
+        let got = dirt_gpu::trace::trace_report(g, ads, rays, trav).expect("trace");
+        let (want, stats) = dirt_cpu::trace_with_stats(cpu, tris, rays, trav);
+        for i in 0..rays.len() {
+            assert_eq!(got.hits[i].bits(), want[i].bits(), "{trav:?} ray {i}");
+            assert_eq!(got.stats[i], stats[i], "{trav:?} ray {i}");
+        }
+    }
+}
+
+/// Both build paths refuse `tris` with `SplitTooLarge` for `want.0` (what,
+/// bytes, bindings, bytes per binding); the frame build from a hint of
+/// `hint` entries, so that the count, not the hint, is refused.
+fn assert_split_refused(
+    g: &dirt_gpu::Gpu,
+    tris: &[Triangle],
+    params: &AdsParams,
+    hint: u64,
+    want: (&str, u64, u64, u64),
+) {
+    match dirt_gpu::GpuAds::build(g, tris, params) {
+        Err(dirt_gpu::GpuError::SplitTooLarge {
+            what,
+            bytes,
+            bindings,
+            per_binding,
+        }) => assert_eq!((what, bytes, bindings as u64, per_binding), want),
+        other => panic!("expected SplitTooLarge, got {:?}", other.map(|a| a.n_tris)),
+    }
+    let mut frame = dirt_gpu::DirtGpu::new(g, *params, Traversal::HiZ);
+    frame.frame_builds = true;
+    frame.entries_hint = hint;
+    match dirt_core::Tracer::build(&mut frame, tris) {
+        Err(e) => assert!(e.to_string().contains(&format!("{} need", want.0)), "{e}"),
+        Ok(_) => panic!("a frame build beyond every binding of {} succeeded", want.0),
+    }
+}
+
 /// List ids beyond one binding (the stacked layers of `layers`: every tile
 /// near the centre lists 256 of them): with `max_storage_buffer_binding_size`
 /// lowered below the ids, both build paths split them across the device's id
@@ -1413,13 +1475,9 @@ fn renderer_on_a_scene_of_only_degenerate_triangles() {
 /// every id binding the build is refused with `GpuError::SplitTooLarge`.
 #[test]
 fn list_ids_beyond_one_binding_are_split_across_bindings() {
-    let Some(exact) =
-        dirt_gpu::testing::exact_gpu("list_ids_beyond_one_binding_are_split_across_bindings")
-    else {
+    let Some(mut g) = exact_context("list_ids_beyond_one_binding_are_split_across_bindings") else {
         return;
     };
-    let mut g = dirt_gpu::Gpu::new().expect("a second context");
-    assert!(g.exact, "{}", exact.describe());
     let tris = dirt_scene::builtin("layers").expect("built-in").triangles;
     // One bucket: few offsets, every layer in one list per tile.
     let params = AdsParams {
@@ -1431,16 +1489,10 @@ fn list_ids_beyond_one_binding_are_split_across_bindings() {
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
     let entries = cpu.lists.ids.len() as u64;
-    let whole = [
-        tris.len() as u64 * 36,
-        cpu.hiz.iter().map(|l| l.len() as u64 * 8).sum::<u64>(),
-        cpu.lists.offsets.len() as u64 * 4,
-    ]
-    .into_iter()
-    .max()
-    .unwrap_or(0);
-    // One binding: the smallest power of two that holds the buffers bound
-    // whole and lets the ids fit the id bindings.
+    // The triangles (18 KB) stay in one binding.
+    let whole = bound_whole(&cpu).max(tris.len() as u64 * 36);
+    // One binding: the smallest power of two that holds the rest and lets
+    // the ids fit the id bindings.
     let id_bindings = g.id_bindings() as u64;
     let per_chunk = entries.div_ceil(id_bindings).next_power_of_two();
     let binding = (per_chunk * 4).max(whole.next_power_of_two());
@@ -1471,46 +1523,18 @@ fn list_ids_beyond_one_binding_are_split_across_bindings() {
     let capacity = (entries + entries / 4).min(id_bindings * (binding / 4));
     assert_eq!(fb.capacity, capacity);
     assert_eq!(ads.id_chunks() as u64, capacity.div_ceil(binding / 4));
-    for trav in [Traversal::Linear, Traversal::HiZ] {
-        let got = dirt_gpu::trace::trace_report(&g, ads, &rays, trav).expect("trace");
-        let (want, stats) = dirt_cpu::trace_with_stats(&cpu, &tris, &rays, trav);
-        for i in 0..rays.len() {
-            assert_eq!(got.hits[i].bits(), want[i].bits(), "{trav:?} ray {i}");
-            assert_eq!(got.stats[i], stats[i], "{trav:?} ray {i}");
-        }
-    }
+    assert_trace_equals_cpu(&g, ads, &cpu, &tris, &rays);
 
-    // The smallest binding that holds the buffers bound whole: the ids need
-    // more than every id binding together, and are refused by name.
+    // The smallest binding that holds the rest: the ids need more than every
+    // id binding together, and are refused by name.
     let small = whole.next_power_of_two();
     assert!(
         entries > id_bindings * (small / 4),
         "{entries} entries fit {id_bindings} bindings of {small} bytes"
     );
     g.limits.max_storage_buffer_binding_size = small;
-    match dirt_gpu::GpuAds::build(&g, &tris, &params) {
-        Err(dirt_gpu::GpuError::SplitTooLarge {
-            what,
-            bytes,
-            bindings,
-            per_binding,
-        }) => assert_eq!(
-            (what, bytes, bindings as u64, per_binding),
-            ("the list ids", entries * 4, id_bindings, small)
-        ),
-        other => panic!(
-            "expected SplitTooLarge, got {:?}",
-            other.map(|a| a.id_chunks())
-        ),
-    }
-    let mut frame = dirt_gpu::DirtGpu::new(&g, params, Traversal::HiZ);
-    frame.frame_builds = true;
-    // Refused when the count makes the ids grow, not for the hint.
-    frame.entries_hint = 16;
-    match dirt_core::Tracer::build(&mut frame, &tris) {
-        Err(e) => assert!(e.to_string().contains("list ids need"), "{e}"),
-        Ok(_) => panic!("a frame build beyond every id binding succeeded"),
-    }
+    let want = ("the list ids", entries * 4, id_bindings, small);
+    assert_split_refused(&g, &tris, &params, 16, want);
 }
 
 /// Triangles beyond one binding (2,000 small ones in a box): with
@@ -1520,13 +1544,10 @@ fn list_ids_beyond_one_binding_are_split_across_bindings() {
 /// every triangle binding the build is refused with `GpuError::SplitTooLarge`.
 #[test]
 fn triangles_beyond_one_binding_are_split_across_bindings() {
-    let Some(exact) =
-        dirt_gpu::testing::exact_gpu("triangles_beyond_one_binding_are_split_across_bindings")
+    let Some(mut g) = exact_context("triangles_beyond_one_binding_are_split_across_bindings")
     else {
         return;
     };
-    let mut g = dirt_gpu::Gpu::new().expect("a second context");
-    assert!(g.exact, "{}", exact.describe());
     // Small triangles: few list entries, so the triangles are the largest buffer.
     let tris: Vec<Triangle> = dirt_tests::random_scene(41, 2000, 1.0)
         .into_iter()
@@ -1554,13 +1575,7 @@ fn triangles_beyond_one_binding_are_split_across_bindings() {
         chunks >= 2 && chunks <= tri_bindings,
         "{n} triangles in chunks of {per_chunk}: {chunks} of {tri_bindings} bindings"
     );
-    let whole = [
-        cpu.hiz.iter().map(|l| l.len() as u64 * 8).sum::<u64>(),
-        cpu.lists.offsets.len() as u64 * 4,
-    ]
-    .into_iter()
-    .max()
-    .unwrap_or(0);
+    let whole = bound_whole(&cpu);
     let entries = cpu.lists.ids.len() as u64;
     assert!(
         whole <= binding && entries <= binding / 4,
@@ -1580,41 +1595,14 @@ fn triangles_beyond_one_binding_are_split_across_bindings() {
     dirt_core::Tracer::build(&mut frame, &tris).expect("frame build, triangles split");
     let ads = frame.ads().expect("built");
     assert_eq!(ads.tri_chunks() as u64, chunks);
-    for trav in [Traversal::Linear, Traversal::HiZ] {
-        let got = dirt_gpu::trace::trace_report(&g, ads, &rays, trav).expect("trace");
-        let (want, stats) = dirt_cpu::trace_with_stats(&cpu, &tris, &rays, trav);
-        for i in 0..rays.len() {
-            assert_eq!(got.hits[i].bits(), want[i].bits(), "{trav:?} ray {i}");
-            assert_eq!(got.stats[i], stats[i], "{trav:?} ray {i}");
-        }
-    }
+    assert_trace_equals_cpu(&g, ads, &cpu, &tris, &rays);
 
     // Half the binding: more chunks than the triangle bindings, refused by name.
     let small = binding / 2;
     assert!(n > tri_bindings * (per_chunk / 2) && whole <= small);
     g.limits.max_storage_buffer_binding_size = small;
-    match dirt_gpu::GpuAds::build(&g, &tris, &params) {
-        Err(dirt_gpu::GpuError::SplitTooLarge {
-            what,
-            bytes,
-            bindings,
-            per_binding,
-        }) => assert_eq!(
-            (what, bytes, bindings as u64, per_binding),
-            ("the triangles", n * 36, tri_bindings, (per_chunk / 2) * 36)
-        ),
-        other => panic!(
-            "expected SplitTooLarge, got {:?}",
-            other.map(|a| a.tri_chunks())
-        ),
-    }
-    let mut frame = dirt_gpu::DirtGpu::new(&g, params, Traversal::HiZ);
-    frame.frame_builds = true;
-    frame.entries_hint = entries;
-    match dirt_core::Tracer::build(&mut frame, &tris) {
-        Err(e) => assert!(e.to_string().contains("the triangles need"), "{e}"),
-        Ok(_) => panic!("a frame build beyond every triangle binding succeeded"),
-    }
+    let want = ("the triangles", n * 36, tri_bindings, (per_chunk / 2) * 36);
+    assert_split_refused(&g, &tris, &params, entries, want);
 }
 
 /// The cost model under a device's binding limit: it chooses a candidate

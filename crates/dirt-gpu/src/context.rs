@@ -272,7 +272,7 @@ impl Gpu {
     }
 
     /// Bindings the list ids are split across: one, and one more per storage
-    /// buffer the device allows per stage beyond [`STORAGE_BUFFERS_PER_STAGE`],
+    /// buffer the device allows per stage beyond 8 (WebGPU's default, which the trace needs),
     /// up to [`dirt_shaders::MAX_CHUNKS`]. Fixed when the device is opened.
     pub fn id_bindings(&self) -> u32 {
         self.id_bindings

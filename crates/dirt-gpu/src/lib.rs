@@ -122,7 +122,8 @@ pub enum GpuError {
     DeviceLost { what: &'static str, message: String },
 }
 
-/// Compiled pipelines, made once per device.
+/// Compiled pipelines, made once per device for one binding per split array, and once more
+/// for the device's bindings when a structure first needs them ([`Gpu::pipelines_for`]).
 #[derive(Debug)]
 pub(crate) struct Pipelines {
     fill_depth: wgpu::RenderPipeline,
