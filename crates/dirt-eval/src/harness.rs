@@ -764,7 +764,24 @@ fn measure_gpu(
         tracer.traversal = trav;
         trace_types(prep, &mut tracer, &subject.with_traversal(trav), plan, res)?;
     }
-    Ok(())
+    // The same structure built as an application's frame would (`DirtGpu::frame_builds`:
+    // upload, views on the GPU, one submission, recorded again if the ids overflowed),
+    // and its hits compared (Hi-Z walk).
+    let frame_subject = prep.subject("dirt-gpu-frame", point.setting());
+    let mut frame = DirtGpu::new(gpu, point.params, Traversal::HiZ);
+    frame.frame_builds = true;
+    let built =
+        measure::build(&mut frame, &prep.tris, cfg.repeat.min(2)).map_err(prep.build_err())?;
+    let structure = frame.ads().map(Structure::of_gpu).unwrap_or_default();
+    res.builds
+        .push(BuildRow::new(&frame_subject, &built, &structure));
+    trace_types(
+        prep,
+        &mut frame,
+        &frame_subject.with_traversal(Traversal::HiZ),
+        plan,
+        res,
+    )
 }
 
 /// Where the scene list's real assets live.

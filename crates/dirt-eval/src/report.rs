@@ -198,7 +198,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         "| GPU | {} |",
         m.gpu
             .as_deref()
-            .map_or_else(|| "not used".to_string(), |g| format!("{g} (figures marked dirt-gpu are this adapter; llvmpipe is Mesa's software rasteriser on the CPU)"))
+            .map_or_else(|| "not used".to_string(), |g| format!("{g} (figures marked dirt-gpu are this adapter; llvmpipe is Mesa's software rasteriser on the CPU; dirt-gpu builds from host triangles, each stage waited for, dirt-gpu-frame as an application's frame: upload, views on the GPU, one submission)"))
     );
     let _ = writeln!(s, "| OS | {} |", m.os);
     let _ = writeln!(
