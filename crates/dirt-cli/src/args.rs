@@ -162,15 +162,10 @@ impl AdsArgs {
             limits,
         )
         .context("cost model: cannot build the candidates")?;
-        if choice.too_large > 0 {
+        if let Some(l) = limits.filter(|_| choice.too_large > 0) {
             eprintln!(
-                "ads: {} candidates need more than the GPU binds (one binding of {} bytes for Hi-Z and offsets; {} triangles and {} list ids, each in {} and {} bindings) and were not chosen",
-                choice.too_large,
-                limits.map_or(0, |l| l.max_binding),
-                limits.map_or(0, |l| l.tri_capacity()),
-                limits.map_or(0, |l| l.id_capacity()),
-                limits.map_or(0, |l| l.tri_bindings),
-                limits.map_or(0, |l| l.id_bindings)
+                "ads: {} candidates need more than the GPU binds ({l}) and were not chosen",
+                choice.too_large
             );
         }
         let best = choice.best.params;

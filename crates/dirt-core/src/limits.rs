@@ -30,9 +30,14 @@ fn shift_for(max_binding: u64, elem_bytes: u64) -> u32 {
 }
 
 impl BindingLimits {
-    /// Base-2 logarithm of the list ids per chunk (4 bytes each).
+    /// Bytes of one list id.
+    pub const ID_BYTES: u64 = 4;
+    /// Bytes of one triangle (`dirt_math::Triangle`).
+    pub const TRI_BYTES: u64 = 36;
+
+    /// Base-2 logarithm of the list ids per chunk.
     pub fn id_shift(&self) -> u32 {
-        shift_for(self.max_binding, 4)
+        shift_for(self.max_binding, Self::ID_BYTES)
     }
 
     /// List ids the chunks can hold, at most `u32::MAX` (offsets are u32).
@@ -40,9 +45,9 @@ impl BindingLimits {
         ((self.id_bindings.max(1) as u64) << self.id_shift()).min(u32::MAX as u64)
     }
 
-    /// Base-2 logarithm of the triangles per chunk (36 bytes each).
+    /// Base-2 logarithm of the triangles per chunk.
     pub fn tri_shift(&self) -> u32 {
-        shift_for(self.max_binding, 36)
+        shift_for(self.max_binding, Self::TRI_BYTES)
     }
 
     /// Triangles the chunks can hold, at most `u32::MAX`.
@@ -56,6 +61,23 @@ impl BindingLimits {
         largest_whole <= self.max_binding
             && tris <= self.tri_capacity()
             && ids <= self.id_capacity()
+    }
+}
+
+/// What the limits allow, in words, for messages: `one binding of B bytes
+/// (max_storage_buffer_binding_size) for Hi-Z and offsets, T triangles in K
+/// bindings, I list ids in J bindings`.
+impl std::fmt::Display for BindingLimits {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "one binding of {} bytes (max_storage_buffer_binding_size) for Hi-Z and offsets, {} triangles in {} bindings, {} list ids in {} bindings",
+            self.max_binding,
+            self.tri_capacity(),
+            self.tri_bindings,
+            self.id_capacity(),
+            self.id_bindings
+        )
     }
 }
 

@@ -489,8 +489,8 @@ pub fn auto(
 
 /// [`auto`] for a device of binding limits `limits` (a GPU's
 /// [`BindingLimits`]): a candidate that does not fit them
-/// ([`Candidate::fits`]: a buffer bound whole beyond one binding, or list
-/// ids beyond the id bindings) is built and measured but never chosen, and
+/// ([`Candidate::fits`]: a buffer bound whole beyond one binding, or
+/// triangles or list ids beyond their bindings) is built and measured but never chosen, and
 /// when the first guesses all exceed them the smaller candidates are tried,
 /// smallest first. An error when none fits.
 pub fn auto_within(
@@ -650,12 +650,7 @@ pub fn auto_within(
     let best = *ranked.first().ok_or_else(|| {
         CpuError::Core(dirt_core::CoreError::InvalidParams(match limits {
             Some(l) if too_large > 0 => format!(
-                "none of the {too_large} candidates built fits the device: one binding of {} bytes (max_storage_buffer_binding_size) for Hi-Z and offsets, {} triangles in {} bindings, {} list ids in {} bindings; the CPU backend traces this scene",
-                l.max_binding,
-                l.tri_capacity(),
-                l.tri_bindings,
-                l.id_capacity(),
-                l.id_bindings
+                "none of the {too_large} candidates built fits the device ({l}); the CPU backend traces this scene"
             ),
             _ => "the cost model was given no candidates".into(),
         }))

@@ -20,8 +20,8 @@ pub(crate) enum Kind {
 impl Kind {
     fn elem_bytes(self) -> u64 {
         match self {
-            Kind::Ids => 4,
-            Kind::Tris => 36,
+            Kind::Ids => dirt_core::BindingLimits::ID_BYTES,
+            Kind::Tris => dirt_core::BindingLimits::TRI_BYTES,
         }
     }
 
@@ -73,11 +73,13 @@ impl Chunked {
         let chunks: Vec<wgpu::Buffer> = (0..count.div_ceil(per_chunk))
             .map(|c| {
                 let n = per_chunk.min(count - c * per_chunk);
-                crate::new_buffer(
+                crate::buffer(
                     gpu,
                     kind.what(),
                     n * elem,
-                    wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                    wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
                 )
             })
             .collect();
@@ -85,7 +87,7 @@ impl Chunked {
         Ok(Chunked {
             kind,
             chunks,
-            spare: crate::new_buffer(gpu, "spare chunk", 16, wgpu::BufferUsages::empty()),
+            spare: crate::buffer(gpu, "spare chunk", 16, wgpu::BufferUsages::STORAGE),
             shift,
             capacity,
         })

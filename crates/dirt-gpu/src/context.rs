@@ -236,10 +236,7 @@ impl Gpu {
         if !split {
             return Ok(&self.pipelines);
         }
-        let chunks = dirt_shaders::Chunks {
-            ids: self.id_bindings,
-            tris: self.tri_bindings,
-        };
+        let chunks = self.chunk_bindings(true);
         self.split
             .get_or_init(|| {
                 crate::Pipelines::new(&self.device, self.exact, chunks).map_err(|e| e.to_string())

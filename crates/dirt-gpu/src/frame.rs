@@ -31,7 +31,9 @@ use crate::fill_depth::{record_coverage, tile_target};
 use crate::fill_primitives::{Scan, grid};
 use crate::gather::GpuMesh;
 use crate::mip_depth::MipDepth;
-use crate::{BuildParams, FrameState, Gpu, GpuAds, GpuError, ViewsParams, bind_buffers, with};
+use crate::{
+    BuildParams, FrameState, Gpu, GpuAds, GpuError, ViewsParams, bind_buffers, buffer, with,
+};
 use dirt_core::{AdsParams, BuildTimings, CoreError};
 use dirt_math::ViewsKind;
 use dirt_math::dda::{hiz_levels, hiz_width};
@@ -87,15 +89,6 @@ pub(crate) struct Frame {
     staging: Vec<(wgpu::Buffer, Arc<AtomicBool>)>,
     recorded: u64,
     grown: u64,
-}
-
-fn buffer(gpu: &Gpu, label: &str, bytes: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
-    gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: bytes.max(16).div_ceil(4) * 4,
-        usage,
-        mapped_at_creation: false,
-    })
 }
 
 const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE;
@@ -303,6 +296,7 @@ impl GpuAds {
         // before anything is recorded: passes over the triangles, and over
         // the triangles and the ids.
         let tris_split = self.tris.is_split();
+        // (`GpuAds::is_split`, field by field: `frame` borrows `self.frame`.)
         let all_split = tris_split || self.ids.is_split();
         let pt = gpu.pipelines_for(tris_split)?;
         let pa = gpu.pipelines_for(all_split)?;

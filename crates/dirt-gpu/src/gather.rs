@@ -107,14 +107,7 @@ pub(crate) fn record(
     ]
     .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
     .into();
-    entries.extend(
-        tris.bindings(gpu, tris.is_split())
-            .into_iter()
-            .map(|(binding, buf)| wgpu::BindGroupEntry {
-                binding,
-                resource: buf.as_entire_binding(),
-            }),
-    );
+    entries.extend(crate::whole(tris.bindings(gpu, tris.is_split())));
     let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("gather"),
         layout: &p.get_bind_group_layout(0),

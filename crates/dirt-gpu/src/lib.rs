@@ -312,17 +312,17 @@ pub(crate) fn check_binding(gpu: &Gpu, what: &'static str, bytes: u64) -> Result
     Ok(())
 }
 
-/// A zeroed storage buffer of `bytes` (at least 16, a multiple of 4) with `extra` usages.
-pub(crate) fn new_buffer(
+/// A zeroed buffer of `bytes` (at least 16, a multiple of 4: empty bindings are invalid).
+pub(crate) fn buffer(
     gpu: &Gpu,
     label: &str,
     bytes: u64,
-    extra: wgpu::BufferUsages,
+    usage: wgpu::BufferUsages,
 ) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: bytes.max(16).div_ceil(4) * 4,
-        usage: wgpu::BufferUsages::STORAGE | extra,
+        usage,
         mapped_at_creation: false,
     })
 }
@@ -381,6 +381,18 @@ pub(crate) fn with<'a>(
     out
 }
 
+/// Bind group entries binding each buffer whole: `(binding, buffer)` pairs.
+pub(crate) fn whole<'a>(
+    buffers: impl IntoIterator<Item = (u32, &'a wgpu::Buffer)>,
+) -> impl Iterator<Item = wgpu::BindGroupEntry<'a>> {
+    buffers
+        .into_iter()
+        .map(|(binding, buf)| wgpu::BindGroupEntry {
+            binding,
+            resource: buf.as_entire_binding(),
+        })
+}
+
 /// A bind group of whole buffers for group 0 of `layout`: `(binding, buffer)` pairs.
 pub(crate) fn bind_buffers(
     gpu: &Gpu,
@@ -388,13 +400,7 @@ pub(crate) fn bind_buffers(
     layout: &wgpu::BindGroupLayout,
     buffers: &[(u32, &wgpu::Buffer)],
 ) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-        .iter()
-        .map(|(binding, buf)| wgpu::BindGroupEntry {
-            binding: *binding,
-            resource: buf.as_entire_binding(),
-        })
-        .collect();
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = whole(buffers.iter().copied()).collect();
     gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(label),
         layout,
@@ -562,6 +568,12 @@ impl GpuAds {
             ids,
             frame: None,
         })
+    }
+
+    /// Whether the triangles or the ids take more than one binding: the
+    /// passes that bind both then need [`Gpu::pipelines_for`]`(true)`.
+    pub(crate) fn is_split(&self) -> bool {
+        self.tris.is_split() || self.ids.is_split()
     }
 
     /// Buffers the list ids take (one per binding they need; see [`Gpu::id_bindings`]).

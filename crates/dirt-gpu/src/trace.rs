@@ -281,7 +281,7 @@ impl TraceResources {
         }
         // The structure's bindings choose the pipelines (compiled if need
         // be), before anything is recorded.
-        let split = ads.tris.is_split() || ads.ids.is_split();
+        let split = ads.is_split();
         let pipelines = gpu.pipelines_for(split)?;
         self.ensure_pool(gpu, count)?;
         let Some(pool) = self.pool.clone() else {
@@ -333,30 +333,19 @@ impl TraceResources {
         ]
         .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
         .into();
-        let chunks = ads
-            .ids
-            .bindings(gpu, split)
-            .into_iter()
-            .chain(ads.tris.bindings(gpu, split));
-        entries.extend(chunks.map(|(binding, buf)| wgpu::BindGroupEntry {
-            binding,
-            resource: buf.as_entire_binding(),
-        }));
+        entries.extend(crate::whole(
+            ads.ids
+                .bindings(gpu, split)
+                .into_iter()
+                .chain(ads.tris.bindings(gpu, split)),
+        ));
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace"),
             layout: &pipelines.trace.get_bind_group_layout(0),
             entries: &entries,
         });
-        {
-            let (x, y) = grid(gpu, n.div_ceil(64));
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("trace"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&pipelines.trace);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        let (x, y) = grid(gpu, n.div_ceil(64));
+        crate::record_dispatch(enc, "trace", &pipelines.trace, &bind, [x, y, 1]);
         self.bind = Some((bind, split));
         self.encode_schedule(gpu, enc, &pool);
         self.encode_continue(gpu, enc)
