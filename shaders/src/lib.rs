@@ -35,7 +35,8 @@ mod layout;
 mod validate;
 
 pub use chunked::{
-    CHUNKED_MODULES, Chunks, ID_BINDING, MAX_CHUNKS, TRI_BINDING, chunked_module, compose_chunked,
+    CHUNKED_MODULES, Chunks, HIZ_BINDING, ID_BINDING, MAX_CHUNKS, OFFSET_BINDING, SCAN_BINDING,
+    TRI_BINDING, chunked_module, compose_chunked,
 };
 pub use compose::{Composed, ShaderError, compose, compose_with};
 pub use layout::{StructLayout, struct_layout};

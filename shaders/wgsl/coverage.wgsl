@@ -16,8 +16,8 @@ struct BuildParams {
     buckets: u32,
     id_shift: u32, // list ids per chunk: 2^id_shift (ids.wgsl)
     tri_shift: u32, // triangles per chunk: 2^tri_shift (tris.wgsl)
-    _pad1: u32,
-    _pad2: u32,
+    hiz_shift: u32, // Hi-Z cells per chunk: 2^hiz_shift (hiz.wgsl)
+    offset_shift: u32, // list offsets per chunk: 2^offset_shift (offsets.wgsl)
 }
 
 @group(0) @binding(1) var<uniform> views: array<View, 6>;

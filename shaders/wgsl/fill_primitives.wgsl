@@ -7,15 +7,16 @@
 #import bucket
 #import coverage
 #import ids
-
-@group(0) @binding(3) var<storage, read> depth: array<u32>;
+#import hiz
 // Counts while counting; cursors (a copy of the offsets) while filling.
-@group(0) @binding(4) var<storage, read_write> lists: array<atomic<u32>>;
+#import lists
+#import scan_data
 
 // The bucket range of a covered fragment, as dirt_math::bucket::bucket_range.
 fn bucket_span(c: Covered) -> vec3<u32> {
-    let zmin = ordered_to_f32(depth[2u * c.tile]);
-    let zmax = ordered_to_f32(depth[2u * c.tile + 1u]);
+    let z = hiz_cell(c.tile, params.hiz_shift);
+    let zmin = ordered_to_f32(z.x);
+    let zmax = ordered_to_f32(z.y);
     if !(c.hi >= zmin && c.lo <= zmax) {
         return vec3<u32>(0u, 1u, 0u); // empty: x > ... flagged by z == 0
     }
@@ -40,7 +41,7 @@ fn count(in: CoverOut) {
         return;
     }
     for (var k = l.x; k <= l.y; k++) {
-        atomicAdd(&lists[k], 1u);
+        list_add(k, params.offset_shift);
     }
 }
 
@@ -51,7 +52,7 @@ fn fill(in: CoverOut) {
         return;
     }
     for (var k = l.x; k <= l.y; k++) {
-        let at = atomicAdd(&lists[k], 1u);
+        let at = list_add(k, params.offset_shift);
         // A build into ids sized ahead of the count (GpuAds::encode_build) may
         // find them too small: nothing is written past their end, and the
         // trace sees offsets' total above their capacity and reports every ray.
@@ -60,15 +61,15 @@ fn fill(in: CoverOut) {
 }
 
 // Exclusive prefix sum, 256 elements per workgroup, in place; each block's
-// total goes to `scan_sums` for the next level.
+// total goes to `scan_sums` for the next level. The data are the offsets'
+// chunks, or one level's sums alone in chunk 0 (with a shift that keeps them there).
 struct ScanParams {
     n: u32,
-    _pad0: u32,
+    shift: u32, // elements per data chunk: 2^shift (scan_data.wgsl)
     _pad1: u32,
     _pad2: u32,
 }
 
-@group(0) @binding(6) var<storage, read_write> scan_data: array<u32>;
 @group(0) @binding(7) var<storage, read_write> scan_sums: array<u32>;
 @group(0) @binding(8) var<uniform> scan: ScanParams;
 
@@ -80,7 +81,7 @@ fn scan_blocks(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_
     let i = block * 256u + lid.x;
     var x = 0u;
     if i < scan.n {
-        x = scan_data[i];
+        x = scan_load(i, scan.shift);
     }
     scan_shared[lid.x] = x;
     workgroupBarrier();
@@ -94,7 +95,7 @@ fn scan_blocks(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_
         workgroupBarrier();
     }
     if i < scan.n {
-        scan_data[i] = scan_shared[lid.x] - x;
+        scan_store(i, scan.shift, scan_shared[lid.x] - x);
     }
     if lid.x == 255u {
         scan_sums[block] = scan_shared[255];
@@ -106,6 +107,6 @@ fn scan_add(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id)
     let block = wid.x + wid.y * nwg.x;
     let i = block * 256u + lid.x;
     if i < scan.n {
-        scan_data[i] += scan_sums[block];
+        scan_store(i, scan.shift, scan_load(i, scan.shift) + scan_sums[block]);
     }
 }

@@ -7,25 +7,16 @@
 
 // Entry `at`; the caller keeps `at` below the ids' capacity.
 fn id_load(at: u32, shift: u32) -> u32 {
-    let i = at & ((1u << shift) - 1u);
+    let i = at;
     var id = 0u;
-    switch at >> shift {
-        default: {
-            id = ids0[i];
-        }
-    }
+    id = ids0[i];
     return id;
 }
 
 // Writes entry `at`; past the end of the chunks nothing is written.
 fn id_store(at: u32, shift: u32, id: u32) {
-    let i = at & ((1u << shift) - 1u);
-    switch at >> shift {
-        case 0u: {
-            if i < arrayLength(&ids0) {
-                ids0[i] = id;
-            }
-        }
-        default: {}
+    let i = at;
+    if i < arrayLength(&ids0) {
+        ids0[i] = id;
     }
 }

@@ -1,5 +1,6 @@
 // Stage `mip_depth`: one Hi-Z level from the one below (min of mins, max of
 // maxes per 2x2 block, cut at the grid's edge). Mirrors dirt_cpu::mip_depth.
+#import hiz_out
 
 // dirt_gpu::MipParams
 struct MipParams {
@@ -7,9 +8,12 @@ struct MipParams {
     dst_base: u32,
     src_w: u32,
     dst_w: u32,
+    shift: u32, // Hi-Z cells per chunk: 2^shift (hiz.wgsl)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
-@group(0) @binding(0) var<storage, read_write> hiz: array<u32>;
 @group(0) @binding(1) var<uniform> mip: MipParams;
 
 @compute @workgroup_size(8, 8)
@@ -29,11 +33,11 @@ fn mip_depth(@builtin(global_invocation_id) gid: vec3<u32>) {
         let sj = 2u * j + (k >> 1u);
         if si < sw && sj < sw {
             let s = mip.src_base + slot * sw * sw + sj * sw + si;
-            lo = min(lo, hiz[2u * s]);
-            hi = max(hi, hiz[2u * s + 1u]);
+            let z = hiz_cell(s, mip.shift);
+            lo = min(lo, z.x);
+            hi = max(hi, z.y);
         }
     }
     let d = mip.dst_base + slot * w * w + j * w + i;
-    hiz[2u * d] = lo;
-    hiz[2u * d + 1u] = hi;
+    hiz_store(d, mip.shift, vec2<u32>(lo, hi));
 }

@@ -21,6 +21,8 @@
 #import triangle
 #import work
 #import ids
+#import hiz
+#import offsets
 #import tris
 
 // dirt_gpu::TraceParams
@@ -38,9 +40,9 @@ struct TraceParams {
     id_shift: u32, // list ids per chunk: 2^id_shift (ids.wgsl)
     id_capacity: u32, // list ids the chunks hold
     tri_shift: u32, // triangles per chunk: 2^tri_shift (tris.wgsl)
+    hiz_shift: u32, // Hi-Z cells per chunk: 2^hiz_shift (hiz.wgsl)
+    offset_shift: u32, // list offsets per chunk: 2^offset_shift (offsets.wgsl)
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 // dirt_gpu::PoolHeader
@@ -65,8 +67,6 @@ struct Pool {
 @group(0) @binding(1) var<storage, read_write> hits: array<Hit>;
 @group(0) @binding(3) var<uniform> views: array<View, 6>;
 @group(0) @binding(4) var<uniform> params: TraceParams;
-@group(0) @binding(5) var<storage, read> hiz: array<u32>;
-@group(0) @binding(6) var<storage, read> offsets: array<u32>;
 @group(0) @binding(8) var<storage, read_write> stats: array<RayStats>;
 @group(0) @binding(9) var<storage, read_write> pool: Pool;
 @group(0) @binding(10) var<storage, read_write> dispatch: array<u32>;
@@ -161,8 +161,9 @@ fn visit_tile(v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
         g_stats.tiles += 1u;
     }
     let tile = v.slot * tile_count(v) + (j * v.tiles + i);
-    let zmin = ordered_to_f32(hiz[2u * tile]);
-    let zmax = ordered_to_f32(hiz[2u * tile + 1u]);
+    let z = hiz_cell(tile, params.hiz_shift);
+    let zmin = ordered_to_f32(z.x);
+    let zmax = ordered_to_f32(z.y);
     let span = depth_span(vr, iv);
     let lo = span.x;
     let hi = span.y;
@@ -194,8 +195,8 @@ fn visit_tile(v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
             g_stats.buckets += 1u;
         }
         let list = tile * nb + k;
-        var at = offsets[list];
-        let end = offsets[list + 1u];
+        var at = offset_load(list, params.offset_shift);
+        let end = offset_load(list + 1u, params.offset_shift);
         if inside {
             at = g_idx[4];
             resumed(4u);
@@ -384,8 +385,9 @@ fn hiz_walk(v: View, vr: ViewRay, iv: Interval) {
             if !inside && !(is_empty(civ) || civ.t0 > g_best.t) {
                 let w = g_level_width[level];
                 let at = g_level_base[level] + v.slot * w * w + cell.z * w + cell.y;
-                let zmin = ordered_to_f32(hiz[2u * at]);
-                let zmax = ordered_to_f32(hiz[2u * at + 1u]);
+                let z = hiz_cell(at, params.hiz_shift);
+                let zmin = ordered_to_f32(z.x);
+                let zmax = ordered_to_f32(z.y);
                 let span = depth_span(vr, civ);
                 enter = span.y >= zmin && span.x <= zmax;
             }
@@ -558,7 +560,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     // Lists that did not fit their ids (a build recorded ahead of its count):
     // the structure is incomplete, and every ray says so.
-    if offsets[params.n_slots * params.tiles * params.tiles * params.buckets] > params.id_capacity {
+    if offset_load(params.n_slots * params.tiles * params.tiles * params.buckets, params.offset_shift) > params.id_capacity {
         hits[r] = Hit(STRUCTURE_FULL_ID, 0.0, 0.0, 0.0);
         if params.with_stats == 1u {
             stats[r] = RayStats(0u, 0u, 0u, 0u);

@@ -8,12 +8,8 @@
 
 // Vertex `k` of triangle `prim`; the caller keeps `prim` below the count.
 fn tri_load(prim: u32, k: u32, shift: u32) -> vec3<f32> {
-    let b = (prim & ((1u << shift) - 1u)) * 9u + k * 3u;
+    let b = prim * 9u + k * 3u;
     var p = vec3<f32>(0.0);
-    switch prim >> shift {
-        default: {
-            p = vec3<f32>(tris0[b], tris0[b + 1u], tris0[b + 2u]);
-        }
-    }
+    p = vec3<f32>(tris0[b], tris0[b + 1u], tris0[b + 2u]);
     return p;
 }

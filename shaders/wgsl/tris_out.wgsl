@@ -5,15 +5,10 @@
 
 // Writes vertex `k` of triangle `prim`; past the end of the chunks nothing is written.
 fn tri_store(prim: u32, k: u32, shift: u32, p: vec3<f32>) {
-    let b = (prim & ((1u << shift) - 1u)) * 9u + k * 3u;
-    switch prim >> shift {
-        case 0u: {
-            if b + 2u < arrayLength(&tris0) {
-                tris0[b] = p.x;
-                tris0[b + 1u] = p.y;
-                tris0[b + 2u] = p.z;
-            }
-        }
-        default: {}
+    let b = prim * 9u + k * 3u;
+    if b + 2u < arrayLength(&tris0) {
+        tris0[b] = p.x;
+        tris0[b + 1u] = p.y;
+        tris0[b + 2u] = p.z;
     }
 }

@@ -204,8 +204,8 @@ fn rays_over_the_gpu_work_budget_are_continued_exactly() {
     );
 }
 
-/// A structure larger than one binding allows is refused before any work,
-/// with the sizes in the message: never truncated.
+/// A structure larger than every binding of the device together is refused
+/// before any work, by name, with the sizes in the message: never truncated.
 #[test]
 fn oversized_structure_is_a_clear_error() {
     let Some(g) = any_gpu("oversized_structure_is_a_clear_error") else {
@@ -219,13 +219,26 @@ fn oversized_structure_is_a_clear_error() {
         tile: 1,
         center: None,
     };
-    match GpuAds::build(g, &tris, &params) {
-        Err(dirt_gpu::GpuError::TooLarge { what, bytes, limit }) => {
-            assert!(bytes > limit, "{what}: {bytes} <= {limit}");
-            let msg = dirt_gpu::GpuError::TooLarge { what, bytes, limit }.to_string();
-            assert!(msg.contains("max_storage_buffer_binding_size"), "{msg}");
+    // 6·2048²·64 + 1 offsets: 6 GiB, beyond any device's offset bindings.
+    let e = GpuAds::build(g, &tris, &params).expect_err("refused");
+    let msg = e.to_string();
+    match e {
+        dirt_gpu::GpuError::SplitTooLarge {
+            what,
+            bytes,
+            bindings,
+            per_binding,
+        } => {
+            assert_eq!(what, "the list offsets");
+            assert_eq!(bytes, (6 * 2048 * 2048 * 64 + 1) * 4);
+            assert_eq!(bindings, g.bindings(dirt_core::SplitArray::Offsets));
+            assert!(bytes > bindings as u64 * per_binding, "{msg}");
+            assert!(
+                msg.contains("max_storage_buffers_per_shader_stage"),
+                "{msg}"
+            );
         }
-        other => panic!("expected TooLarge, got {other:?}"),
+        other => panic!("expected SplitTooLarge, got {other:?}"),
     }
 }
 

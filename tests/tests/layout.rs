@@ -97,9 +97,9 @@ fn shared_structs_match_their_wgsl() {
             id_shift,
             id_capacity,
             tri_shift,
-            _pad0,
-            _pad1,
-            _pad2
+            hiz_shift,
+            offset_shift,
+            _pad0
         }),
     );
     check(
@@ -122,8 +122,8 @@ fn shared_structs_match_their_wgsl() {
             buckets,
             id_shift,
             tri_shift,
-            _pad1,
-            _pad2
+            hiz_shift,
+            offset_shift
         }),
     );
     check(
@@ -133,7 +133,11 @@ fn shared_structs_match_their_wgsl() {
             src_base,
             dst_base,
             src_w,
-            dst_w
+            dst_w,
+            shift,
+            _pad0,
+            _pad1,
+            _pad2
         }),
     );
     check(
@@ -173,7 +177,7 @@ fn shared_structs_match_their_wgsl() {
         "ScanParams",
         rust_layout!(ScanParams {
             n,
-            _pad0,
+            shift,
             _pad1,
             _pad2
         }),

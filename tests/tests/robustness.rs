@@ -1079,16 +1079,19 @@ fn empty_scene_misses_everywhere() {
     assert_gpu_equals_cpu("empty", &[], &rays, &robust_matrix(16, None)[3]);
 }
 
-/// Scenes beyond the adapter's binding size: a context whose
+/// Scenes beyond the adapter's bindings: a context whose
 /// `max_storage_buffer_binding_size` is lowered (`Gpu::limits` is what every
-/// size check reads) refuses each buffer bound whole (Hi-Z, offsets) that does not fit with
-/// `GpuError::TooLarge` naming it, and traces rays in chunks otherwise.
+/// size check reads) refuses, at each binding size, the first array (in the
+/// order a build makes them: triangles, Hi-Z pyramid, offsets, ids) that
+/// needs more than all its bindings hold, with `GpuError::SplitTooLarge`
+/// naming it and its sizes, builds when every array fits, and traces rays in
+/// chunks otherwise.
 #[test]
 fn scenes_beyond_gpu_limits_are_refused_by_name() {
-    if any_gpu("scenes_beyond_gpu_limits_are_refused_by_name").is_none() {
+    use dirt_core::SplitArray;
+    let Some(mut g) = exact_context("scenes_beyond_gpu_limits_are_refused_by_name") else {
         return;
-    }
-    let mut g = dirt_gpu::Gpu::new().expect("a second context");
+    };
     let mut rng = Rng(31);
     let mut corner = || {
         Vec3::new(
@@ -1103,42 +1106,85 @@ fn scenes_beyond_gpu_limits_are_refused_by_name() {
     let params = AdsParams {
         views: ViewsKind::Cube,
         resolution: 8,
-        buckets: 4,
+        buckets: 8,
         tile: 1,
         center: None,
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
-    let nodes = cpu.lists.ids.len() as u64;
-    let offsets = (cpu.lists.offsets.len() as u64) * 4;
-    let hiz = cpu.hiz.iter().map(|l| l.len() as u64 * 8).sum::<u64>();
-    // Coarse tiles, large triangles and a few buckets: the buffers grow in the
-    // order they are checked, so each in turn can be the first that does not fit.
-    assert!(
-        30 * 36 < hiz && hiz < offsets && offsets < nodes * 4,
-        "{hiz} {offsets} {nodes}"
-    );
-    // (Triangles and list ids are split across bindings: the next tests.)
-    let cases: [(u64, &str); 2] = [(hiz - 4, "Hi-Z pyramid"), (offsets - 4, "list offsets")];
-    for (limit, expect) in cases {
-        g.limits.max_storage_buffer_binding_size = limit;
-        match dirt_gpu::GpuAds::build(&g, &tris, &params) {
-            Err(dirt_gpu::GpuError::TooLarge {
-                what,
-                bytes,
-                limit: l,
-            }) => {
-                // The one buffer just over the limit, named, with its size.
-                assert_eq!((what, l, bytes), (expect, limit, limit + 4));
+    let counts = [
+        (SplitArray::Tris, tris.len() as u64),
+        (
+            SplitArray::Hiz,
+            cpu.hiz.iter().map(|l| l.len() as u64).sum(),
+        ),
+        (SplitArray::Offsets, cpu.lists.offsets.len() as u64),
+        (SplitArray::Ids, cpu.lists.ids.len() as u64),
+    ];
+    let rays = adversarial_rays(&tris, 10, 31);
+    let mut refused = Vec::new();
+    let mut built = Vec::new();
+    for m in 4..16 {
+        g.limits.max_storage_buffer_binding_size = 1 << m;
+        let l = g.binding_limits();
+        let first = counts.iter().find(|(a, n)| *n > l.capacity(*a));
+        match (first, dirt_gpu::GpuAds::build(&g, &tris, &params)) {
+            (
+                Some(&(a, n)),
+                Err(dirt_gpu::GpuError::SplitTooLarge {
+                    what,
+                    bytes,
+                    bindings,
+                    per_binding,
+                }),
+            ) => {
+                // The first array that does not fit, named, with its sizes.
+                let want = (
+                    a.what(),
+                    n * a.elem_bytes(),
+                    l.bindings(a),
+                    a.elem_bytes() << l.shift(a),
+                );
+                assert_eq!((what, bytes, bindings, per_binding), want, "2^{m} bytes");
+                if refused.last() != Some(&what) {
+                    refused.push(what);
+                }
             }
-            other => panic!("limit {limit}: expected TooLarge for {expect}, got {other:?}"),
+            (None, Ok(ads)) => {
+                // Split wherever it must be, and the CPU's structure and hits to the bit.
+                let d = dirt_tests::gpu_differences_of(&g, &ads, &tris, &rays);
+                assert!(d.is_empty(), "2^{m} bytes: {}", d.summary());
+                built.push((m, ads.hiz_chunks(), ads.offset_chunks()));
+            }
+            (want, got) => panic!(
+                "2^{m} bytes: expected {:?} refused, got {:?}",
+                want.map(|(a, _)| a.what()),
+                got.map(|a| a.n_tris)
+            ),
         }
     }
+    // Each array in turn is the one refused as the bindings grow.
+    assert_eq!(
+        refused,
+        [
+            "the triangles",
+            "the Hi-Z pyramid",
+            "the list offsets",
+            "the list ids"
+        ],
+        "{counts:?}"
+    );
+    // The smallest binding that builds splits the offsets (the Hi-Z pyramid:
+    // the next test), and a large one splits nothing.
+    assert!(built.first().is_some_and(|&(_, _, o)| o > 1), "{built:?}");
+    assert!(
+        built.last().is_some_and(|&(_, h, o)| h == 1 && o == 1),
+        "{built:?}"
+    );
     // Rays are traced in chunks that fit the binding limit (the continuation
     // pool, 72 bytes a ray, is the largest binding): a low limit makes more
     // chunks, not a refusal, and the same hits.
     g.limits.max_storage_buffer_binding_size = 1 << 30;
     let ads = dirt_gpu::GpuAds::build(&g, &tris, &params).expect("fits");
-    let rays = adversarial_rays(&tris, 10, 31);
     let whole = dirt_gpu::trace::trace_report(&g, &ads, &rays, Traversal::Linear).expect("trace");
     g.limits.max_storage_buffer_binding_size = 1000;
     let chunked = dirt_gpu::trace::trace_report(&g, &ads, &rays, Traversal::Linear)
@@ -1440,6 +1486,19 @@ fn assert_trace_equals_cpu(
     }
 }
 
+/// `n` random triangles in a box, each shrunk about its centroid by
+/// `scale`: few list entries for their count.
+fn small_triangles(seed: u64, n: usize, scale: f32) -> Vec<Triangle> {
+    dirt_tests::random_scene(seed, n, 1.0)
+        .into_iter()
+        .map(|t| {
+            let c = (t.vertex(0) + t.vertex(1) + t.vertex(2)) / 3.0;
+            let s = |p: Vec3| c + (p - c) * scale;
+            Triangle::new(s(t.vertex(0)), s(t.vertex(1)), s(t.vertex(2)))
+        })
+        .collect()
+}
+
 /// Both build paths refuse `tris` with `SplitTooLarge` for `want.0` (what,
 /// bytes, bindings, bytes per binding); the frame build from a hint of
 /// `hint` entries, so that the count, not the hint, is refused.
@@ -1549,14 +1608,7 @@ fn triangles_beyond_one_binding_are_split_across_bindings() {
         return;
     };
     // Small triangles: few list entries, so the triangles are the largest buffer.
-    let tris: Vec<Triangle> = dirt_tests::random_scene(41, 2000, 1.0)
-        .into_iter()
-        .map(|t| {
-            let c = (t.vertex(0) + t.vertex(1) + t.vertex(2)) / 3.0;
-            let s = |p: Vec3| c + (p - c) * 0.03;
-            Triangle::new(s(t.vertex(0)), s(t.vertex(1)), s(t.vertex(2)))
-        })
-        .collect();
+    let tris = small_triangles(41, 2000, 0.03);
     let params = AdsParams {
         views: ViewsKind::Single,
         resolution: 8,
@@ -1605,6 +1657,85 @@ fn triangles_beyond_one_binding_are_split_across_bindings() {
     assert_split_refused(&g, &tris, &params, entries, want);
 }
 
+/// The Hi-Z pyramid and the list offsets beyond one binding (a fine single
+/// view of small triangles, one bucket: the pyramid is the largest array):
+/// with `max_storage_buffer_binding_size` lowered below them, both build
+/// paths split them across their bindings — `fill_depth`'s atomics,
+/// `mip_depth`, the count, the prefix sum across chunks, the cursors, the
+/// frame's clear and its feedback total — and equal the CPU to the bit
+/// (structure, hits, statistics).
+#[test]
+fn hiz_and_offsets_beyond_one_binding_are_split_across_bindings() {
+    use dirt_core::SplitArray;
+    let Some(mut g) = exact_context("hiz_and_offsets_beyond_one_binding_are_split_across_bindings")
+    else {
+        return;
+    };
+    let tris = small_triangles(43, 100, 0.05);
+    let params = AdsParams {
+        views: ViewsKind::Single,
+        resolution: 32,
+        buckets: 1,
+        tile: 1,
+        center: None,
+    };
+    let cpu = Ads::build(&tris, &params).expect("cpu build");
+    let cells: u64 = cpu.hiz.iter().map(|l| l.len() as u64).sum();
+    let offsets = cpu.lists.offsets.len() as u64;
+    let counts = [
+        (SplitArray::Tris, tris.len() as u64),
+        (SplitArray::Hiz, cells),
+        (SplitArray::Offsets, offsets),
+        (SplitArray::Ids, cpu.lists.ids.len() as u64),
+    ];
+    // The smallest power-of-two binding every array fits.
+    let binding = (4..30)
+        .map(|m| 1u64 << m)
+        .find(|&b| {
+            g.limits.max_storage_buffer_binding_size = b;
+            let l = g.binding_limits();
+            counts.iter().all(|&(a, n)| n <= l.capacity(a))
+        })
+        .expect("a binding that fits");
+    g.limits.max_storage_buffer_binding_size = binding;
+    let l = g.binding_limits();
+    let chunks = |a: SplitArray, n: u64| n.div_ceil(1 << l.shift(a));
+    let (hiz_chunks, offset_chunks) = (
+        chunks(SplitArray::Hiz, cells),
+        chunks(SplitArray::Offsets, offsets),
+    );
+    assert!(
+        hiz_chunks >= 2 && offset_chunks >= 2,
+        "{counts:?} in bindings of {binding} bytes"
+    );
+    let rays = adversarial_rays(&tris, 60, 43);
+
+    let host = dirt_gpu::GpuAds::build(&g, &tris, &params).expect("host build, split");
+    assert_eq!(
+        (host.hiz_chunks() as u64, host.offset_chunks() as u64),
+        (hiz_chunks, offset_chunks)
+    );
+    let d = dirt_tests::gpu_differences_of(&g, &host, &tris, &rays);
+    assert!(d.is_empty(), "host build: {}", d.summary());
+
+    let mut frame = dirt_gpu::DirtGpu::new(&g, params, Traversal::HiZ);
+    frame.frame_builds = true;
+    frame.entries_hint = cpu.lists.ids.len() as u64;
+    dirt_core::Tracer::build(&mut frame, &tris).expect("frame build, split");
+    let ads = frame.ads().expect("built");
+    assert_eq!(
+        (ads.hiz_chunks() as u64, ads.offset_chunks() as u64),
+        (hiz_chunks, offset_chunks)
+    );
+    let fb = ads.feedback().expect("a frame structure");
+    assert_eq!(
+        (fb.entries_needed, fb.overflows),
+        (cpu.lists.ids.len() as u64, 0)
+    );
+    assert_eq!(ads.read_hiz(&g).expect("hi-z"), cpu.hiz);
+    assert_trace_equals_cpu(&g, ads, &cpu, &tris, &rays);
+}
+
 /// The cost model under a device's binding limit: it chooses a candidate
 /// whose every GPU binding fits, and says so by name when none does.
 #[test]
@@ -1616,37 +1747,30 @@ fn the_cost_model_chooses_within_a_devices_binding_limit() {
     let model = &cost::CostModel::CALIBRATED;
     let trav = dirt_core::Traversal::HiZ;
     let free = cost::auto(&tris, &sample, 1 << 20, trav, model, &cands).expect("a choice");
-    let limits = |max_binding, id_bindings| {
-        Some(dirt_core::BindingLimits {
-            max_binding,
-            id_bindings,
-            tri_bindings: id_bindings,
-        })
+    // One binding per array, as WebGPU's default limits give.
+    let limits = |max_binding| Some(dirt_core::BindingLimits::for_device(max_binding, 8));
+    let largest = |c: &cost::Candidate| {
+        [c.hiz_cells * 8, c.offsets * 4, c.ids * 4, c.tris * 36]
+            .into_iter()
+            .max()
+            .unwrap_or(0)
     };
-    // One binding too small for what the free choice binds whole.
-    let limit = free.best.largest_binding / 2;
-    let within = cost::auto_within(
-        &tris,
-        &sample,
-        1 << 20,
-        trav,
-        model,
-        &cands,
-        limits(limit, 8),
-    )
-    .expect("a choice within the limit");
+    // One binding too small for the free choice's largest array.
+    let limit = largest(&free.best) / 2;
+    let within = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, limits(limit))
+        .expect("a choice within the limit");
     assert!(
-        within.best.largest_binding <= limit,
+        largest(&within.best) <= limit,
         "{} > {limit}",
-        within.best.largest_binding
+        largest(&within.best)
     );
     assert!(within.too_large > 0);
-    // Every candidate ranked fits, ids included (split across the id bindings).
-    let l = limits(limit, 8).expect("limits");
+    // Every candidate ranked fits, every array within its bindings.
+    let l = limits(limit).expect("limits");
     assert!(within.ranked.iter().all(|c| c.fits(&l)));
-    let e = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, limits(64, 1))
+    let e = cost::auto_within(&tris, &sample, 1 << 20, trav, model, &cands, limits(64))
         .err()
         .map(|e| e.to_string())
         .unwrap_or_default();
-    assert!(e.contains("one binding of 64 bytes"), "{e}");
+    assert!(e.contains("bindings of at most 64 bytes"), "{e}");
 }

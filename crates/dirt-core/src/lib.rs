@@ -27,7 +27,7 @@ mod views;
 
 pub use dirt_math::{Hit, Ray, RayStats, Triangle, ViewSet, ViewsKind};
 pub use error::CoreError;
-pub use limits::BindingLimits;
+pub use limits::{BindingLimits, SplitArray};
 pub use lists::{BuildTimings, IdLists};
 pub use params::{AdsParams, Traversal};
 pub use tracer::{BuildReport, TraceReport, Tracer, check_lengths};

@@ -18,7 +18,7 @@
 //! gives the same hits.
 
 use crate::{Ads, CpuError, trace_with_stats};
-use dirt_core::{AdsParams, BindingLimits, Traversal, ViewsKind};
+use dirt_core::{AdsParams, BindingLimits, SplitArray, Traversal, ViewsKind};
 use dirt_math::{Ray, Triangle};
 
 /// Weights of the frame-cost model, in nanoseconds per unit.
@@ -216,22 +216,26 @@ pub struct Candidate {
     pub frame_ms: f64,
     /// Bytes of the structure.
     pub bytes: u64,
-    /// Bytes of the larger buffer the GPU binds whole for it (the Hi-Z
-    /// pyramid or the list offsets): what a device's
-    /// `max_storage_buffer_binding_size` must hold.
-    pub largest_binding: u64,
-    /// Triangles: split across a device's triangle bindings
-    /// ([`dirt_core::BindingLimits::tri_capacity`]), not bound whole.
+    /// Triangles.
     pub tris: u64,
-    /// List entries (ids): split across a device's id bindings
-    /// ([`dirt_core::BindingLimits::id_capacity`]), not bound whole.
+    /// List entries (ids).
     pub ids: u64,
+    /// Cells of the Hi-Z pyramid, depth bounds included.
+    pub hiz_cells: u64,
+    /// List offsets (one per list, and the total).
+    pub offsets: u64,
 }
 
 impl Candidate {
-    /// Whether a device of `limits` can hold its structure.
+    /// Whether a device of `limits` can hold its structure: each array
+    /// within its bindings ([`BindingLimits::capacity`]).
     pub fn fits(&self, limits: &BindingLimits) -> bool {
-        limits.fits(self.largest_binding, self.tris, self.ids)
+        limits.fits([
+            (SplitArray::Tris, self.tris),
+            (SplitArray::Ids, self.ids),
+            (SplitArray::Hiz, self.hiz_cells),
+            (SplitArray::Offsets, self.offsets),
+        ])
     }
 }
 
@@ -254,15 +258,10 @@ impl Candidate {
             ray_ns: model.ray_ns(&counts),
             frame_ms: model.frame_ms(&counts, rays_per_frame),
             bytes: ads.memory().total(),
-            largest_binding: [
-                ads.hiz.iter().map(|l| l.len() as u64 * 8).sum(),
-                ads.lists.offsets.len() as u64 * 4,
-            ]
-            .into_iter()
-            .max()
-            .unwrap_or(0),
             tris: tris.len() as u64,
             ids: ads.lists.ids.len() as u64,
+            hiz_cells: ads.hiz.iter().map(|l| l.len() as u64).sum(),
+            offsets: ads.lists.offsets.len() as u64,
         }
     }
 }

@@ -1,35 +1,55 @@
-//! Buffers split across bindings (`ids.wgsl`, `tris.wgsl`): chunk `c` holds
-//! elements `c·2^shift ..`, each chunk a buffer and a binding of its own, so
-//! that one binding's size (`max_storage_buffer_binding_size`, 128 MiB on
-//! lavapipe and in WebGPU by default) does not bound a scene's triangles or
-//! its list entries; the device's memory and its bindings
-//! ([`Gpu::id_bindings`], [`Gpu::tri_bindings`]) do.
-//! [`dirt_core::BindingLimits`] is the rule, shared with the cost model.
+//! Buffers split across bindings (`ids.wgsl`, `tris.wgsl`, `hiz.wgsl`,
+//! `offsets.wgsl`): chunk `c` holds elements `c·2^shift ..`, each chunk a
+//! buffer and a binding of its own, so that one binding's size
+//! (`max_storage_buffer_binding_size`, 128 MiB on lavapipe and in WebGPU by
+//! default) bounds none of a structure's arrays; the device's memory and its
+//! bindings ([`Gpu::bindings`]) do. [`dirt_core::BindingLimits`] is the rule,
+//! shared with the cost model.
 
 use crate::{Gpu, GpuError, read_back};
+pub(crate) use dirt_core::SplitArray as Kind;
 
-/// Which split array.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Kind {
-    /// List ids, 4 bytes each.
-    Ids,
-    /// Triangles, 36 bytes each.
-    Tris,
-}
+/// Which of a structure's arrays take more than one binding: one bit per
+/// [`Kind`]. It chooses the pipelines a structure's passes run
+/// ([`Gpu::pipelines_for`]): those with one binding per array when nothing is
+/// split, so that a scene pays for the chunk `switch` only where it needs it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub(crate) struct Split(u8);
 
-impl Kind {
-    fn elem_bytes(self) -> u64 {
-        match self {
-            Kind::Ids => dirt_core::BindingLimits::ID_BYTES,
-            Kind::Tris => dirt_core::BindingLimits::TRI_BYTES,
+impl Split {
+    /// Nothing split: the pipelines made with the [`Gpu`].
+    pub(crate) const NONE: Split = Split(0);
+
+    /// The variants there can be.
+    pub(crate) const VARIANTS: usize = 16;
+
+    fn bit(kind: Kind) -> u8 {
+        match kind {
+            Kind::Ids => 1,
+            Kind::Tris => 2,
+            Kind::Hiz => 4,
+            Kind::Offsets => 8,
         }
     }
 
-    fn what(self) -> &'static str {
-        match self {
-            Kind::Ids => "the list ids",
-            Kind::Tris => "the triangles",
-        }
+    /// The split arrays among `arrays`.
+    pub(crate) fn of(arrays: &[&Chunked]) -> Split {
+        Split(
+            arrays
+                .iter()
+                .filter(|a| a.is_split())
+                .fold(0, |m, a| m | Self::bit(a.kind)),
+        )
+    }
+
+    /// Whether `kind` is split.
+    pub(crate) fn has(self, kind: Kind) -> bool {
+        self.0 & Self::bit(kind) != 0
+    }
+
+    /// The variant's index, `0..VARIANTS`.
+    pub(crate) fn index(self) -> usize {
+        self.0 as usize
     }
 }
 
@@ -46,25 +66,28 @@ pub(crate) struct Chunked {
     capacity: u64,
 }
 
+/// The first binding of `kind`'s chunks in the shaders.
+fn first_binding(kind: Kind) -> u32 {
+    match kind {
+        Kind::Ids => dirt_shaders::ID_BINDING,
+        Kind::Tris => dirt_shaders::TRI_BINDING,
+        Kind::Hiz => dirt_shaders::HIZ_BINDING,
+        Kind::Offsets => dirt_shaders::OFFSET_BINDING,
+    }
+}
+
 impl Chunked {
     /// Room for `count` elements (at least one), zeroed; an error naming the
     /// sizes when the device cannot bind that many.
     pub(crate) fn new(gpu: &Gpu, kind: Kind, count: u64) -> Result<Chunked, GpuError> {
         let limits = gpu.binding_limits();
-        let (shift, capacity, bindings) = match kind {
-            Kind::Ids => (limits.id_shift(), limits.id_capacity(), limits.id_bindings),
-            Kind::Tris => (
-                limits.tri_shift(),
-                limits.tri_capacity(),
-                limits.tri_bindings,
-            ),
-        };
+        let (shift, capacity) = (limits.shift(kind), limits.capacity(kind));
         let elem = kind.elem_bytes();
         if count > capacity {
             return Err(GpuError::SplitTooLarge {
                 what: kind.what(),
                 bytes: count.saturating_mul(elem),
-                bindings,
+                bindings: limits.bindings(kind),
                 per_binding: elem << shift,
             });
         }
@@ -131,14 +154,20 @@ impl Chunked {
     }
 
     /// `(binding, buffer)` for every binding of the kind the pipelines of
-    /// [`Gpu::pipelines_for`]`(split)` declare.
-    pub(crate) fn bindings(&self, gpu: &Gpu, split: bool) -> Vec<(u32, &wgpu::Buffer)> {
-        let counts = gpu.chunk_bindings(split);
-        let (first, n) = match self.kind {
-            Kind::Ids => (dirt_shaders::ID_BINDING, counts.ids),
-            Kind::Tris => (dirt_shaders::TRI_BINDING, counts.tris),
-        };
-        (0..n)
+    /// [`Gpu::pipelines_for`]`(split)` declare, from the kind's first binding.
+    pub(crate) fn bindings(&self, gpu: &Gpu, split: Split) -> Vec<(u32, &wgpu::Buffer)> {
+        self.bindings_at(first_binding(self.kind), gpu, split)
+    }
+
+    /// [`Chunked::bindings`] from binding `first` (the prefix sum binds the
+    /// offsets at its own bindings).
+    pub(crate) fn bindings_at(
+        &self,
+        first: u32,
+        gpu: &Gpu,
+        split: Split,
+    ) -> Vec<(u32, &wgpu::Buffer)> {
+        (0..gpu.declared(split, self.kind))
             .map(|c| {
                 (
                     first + c,
@@ -146,6 +175,29 @@ impl Chunked {
                 )
             })
             .collect()
+    }
+
+    /// The chunk holding element `at`, and the element's byte offset in it.
+    pub(crate) fn locate(&self, at: u64) -> Option<(&wgpu::Buffer, u64)> {
+        let chunk = self.chunks.get((at >> self.shift) as usize)?;
+        Some((
+            chunk,
+            (at & ((1u64 << self.shift) - 1)) * self.kind.elem_bytes(),
+        ))
+    }
+
+    /// Records zeroing every chunk.
+    pub(crate) fn encode_clear(&self, enc: &mut wgpu::CommandEncoder) {
+        for c in &self.chunks {
+            enc.clear_buffer(c, 0, None);
+        }
+    }
+
+    /// Records a copy of every chunk into `dst`'s (an array made alike).
+    pub(crate) fn encode_copy(&self, enc: &mut wgpu::CommandEncoder, dst: &Chunked) {
+        for (a, b) in self.chunks.iter().zip(&dst.chunks) {
+            enc.copy_buffer_to_buffer(a, 0, b, 0, a.size().min(b.size()));
+        }
     }
 
     /// The first `count` elements, read back, as bytes laid end to end.

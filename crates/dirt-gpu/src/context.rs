@@ -3,6 +3,8 @@
 //! within), and the compiled pipelines of every stage.
 
 use crate::GpuError;
+use crate::chunked::{Kind, Split};
+use dirt_core::BindingLimits;
 
 /// How dirt uses a device. Library users set these; nothing is read from the
 /// environment except by [`GpuOptions::from_env`] (the command line and the
@@ -27,13 +29,13 @@ impl GpuOptions {
     }
 }
 
-/// Storage buffers the trace binds in one compute stage with the list ids and
-/// the triangles in one binding each (rays, hits, triangles, Hi-Z, offsets,
-/// statistics, continuation pool, ids): WebGPU's default limit, which every
-/// adapter gives. Each storage buffer a device allows beyond it is one more
-/// binding for the list ids ([`Gpu::id_bindings`]) and, once they have
-/// [`dirt_shaders::MAX_CHUNKS`], for the triangles ([`Gpu::tri_bindings`]).
-pub const STORAGE_BUFFERS_PER_STAGE: u32 = 8;
+/// Storage buffers the trace binds in one compute stage with each split
+/// array in one binding (rays, hits, statistics, continuation pool, ids,
+/// triangles, Hi-Z, offsets): WebGPU's default limit, which every adapter
+/// gives. Each storage buffer a device allows beyond it is one more binding
+/// for a split array ([`Gpu::bindings`], dealt by
+/// [`BindingLimits::for_device`]).
+pub const STORAGE_BUFFERS_PER_STAGE: u32 = BindingLimits::MIN_STORAGE_BUFFERS;
 
 /// A device ready to run dirt's passes.
 #[derive(Debug)]
@@ -50,13 +52,13 @@ pub struct Gpu {
     /// The pipelines with one binding per split array: what every structure
     /// that fits them uses.
     pub(crate) pipelines: crate::Pipelines,
-    /// The pipelines with the device's bindings per split array, compiled the
-    /// first time a structure needs more than one ([`Gpu::pipelines_for`]).
-    split: std::sync::OnceLock<Result<crate::Pipelines, String>>,
-    /// Bindings the list ids are split across (see [`Gpu::id_bindings`]).
-    id_bindings: u32,
-    /// Bindings the triangles are split across (see [`Gpu::tri_bindings`]).
-    tri_bindings: u32,
+    /// The pipelines with the device's bindings for the split arrays of a
+    /// [`Split`], each compiled the first time a structure needs it
+    /// ([`Gpu::pipelines_for`]).
+    split: [std::sync::OnceLock<Result<crate::Pipelines, String>>; Split::VARIANTS],
+    /// Bindings each split array takes at most (see [`Gpu::bindings`]);
+    /// `max_binding` is not read from here.
+    bindings: BindingLimits,
     /// Submissions and host waits dirt made itself (see [`Gpu::host_syncs`]).
     submits: std::sync::atomic::AtomicU64,
     waits: std::sync::atomic::AtomicU64,
@@ -170,7 +172,7 @@ impl Gpu {
             max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
             max_storage_buffers_per_shader_stage: supported
                 .max_storage_buffers_per_shader_stage
-                .min(STORAGE_BUFFERS_PER_STAGE - 2 + 2 * dirt_shaders::MAX_CHUNKS)
+                .min(BindingLimits::MAX_STORAGE_BUFFERS)
                 .max(wgpu::Limits::default().max_storage_buffers_per_shader_stage),
             max_buffer_size: supported.max_buffer_size,
             max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
@@ -189,8 +191,8 @@ impl Gpu {
 
     /// dirt on the application's device and queue. Features and limits are
     /// read from the device; the exact path is decided by [`exact_path`]; the
-    /// pipelines are compiled here, once (those for triangles or ids split
-    /// across several bindings when a structure first needs them). The device and queue are shared
+    /// pipelines are compiled here, once (those for arrays split across
+    /// several bindings when a structure first needs them). The device and queue are shared
     /// (wgpu's handles are reference counted), not copied.
     pub fn from_device(
         device: &wgpu::Device,
@@ -206,10 +208,10 @@ impl Gpu {
             )));
         }
         let (exact, exactness) = exact_path(info.backend, device.features(), options);
-        // Bindings beyond the minimum go to the ids first (they grow fastest), then the triangles.
-        let extra = limits.max_storage_buffers_per_shader_stage - STORAGE_BUFFERS_PER_STAGE;
-        let id_bindings = 1 + extra.min(dirt_shaders::MAX_CHUNKS - 1);
-        let tri_bindings = 1 + (extra - (id_bindings - 1)).min(dirt_shaders::MAX_CHUNKS - 1);
+        let bindings = BindingLimits::for_device(
+            limits.max_storage_buffer_binding_size,
+            limits.max_storage_buffers_per_shader_stage,
+        );
         let pipelines = crate::Pipelines::new(device, exact, dirt_shaders::Chunks::ONE)?;
         Ok(Gpu {
             device: device.clone(),
@@ -219,25 +221,24 @@ impl Gpu {
             exact,
             exactness,
             pipelines,
-            split: std::sync::OnceLock::new(),
-            id_bindings,
-            tri_bindings,
+            split: Default::default(),
+            bindings,
             submits: Default::default(),
             waits: Default::default(),
             lost: Default::default(),
         })
     }
 
-    /// The pipelines for passes over split arrays: with one binding each when
-    /// none of them is split (`split` false), else with the device's bindings,
-    /// compiled on first use. A scene pays for the chunk switch in its shaders
-    /// only when it needs it.
-    pub(crate) fn pipelines_for(&self, split: bool) -> Result<&crate::Pipelines, GpuError> {
-        if !split {
+    /// The pipelines for a structure whose split arrays are `split`: with one
+    /// binding per array when none is split, else with the device's bindings
+    /// for the split ones, compiled on first use. A scene pays for the chunk
+    /// switch in its shaders only where it needs it.
+    pub(crate) fn pipelines_for(&self, split: Split) -> Result<&crate::Pipelines, GpuError> {
+        if split == Split::NONE {
             return Ok(&self.pipelines);
         }
-        let chunks = self.chunk_bindings(true);
-        self.split
+        let chunks = self.chunk_bindings(split);
+        self.split[split.index()]
             .get_or_init(|| {
                 crate::Pipelines::new(&self.device, self.exact, chunks).map_err(|e| e.to_string())
             })
@@ -248,15 +249,22 @@ impl Gpu {
             })
     }
 
-    /// Bindings a pass declares per split array: one, or the device's.
-    pub(crate) fn chunk_bindings(&self, split: bool) -> dirt_shaders::Chunks {
-        if split {
-            dirt_shaders::Chunks {
-                ids: self.id_bindings,
-                tris: self.tri_bindings,
-            }
+    /// Bindings the pipelines of `split` declare for `kind`: one, or the device's.
+    pub(crate) fn declared(&self, split: Split, kind: Kind) -> u32 {
+        if split.has(kind) {
+            self.bindings.bindings(kind)
         } else {
-            dirt_shaders::Chunks::ONE
+            1
+        }
+    }
+
+    /// Bindings the pipelines of `split` declare per split array.
+    pub(crate) fn chunk_bindings(&self, split: Split) -> dirt_shaders::Chunks {
+        dirt_shaders::Chunks {
+            ids: self.declared(split, Kind::Ids),
+            tris: self.declared(split, Kind::Tris),
+            hiz: self.declared(split, Kind::Hiz),
+            offsets: self.declared(split, Kind::Offsets),
         }
     }
 
@@ -268,29 +276,34 @@ impl Gpu {
         )
     }
 
-    /// Bindings the list ids are split across: one, and one more per storage
-    /// buffer the device allows per stage beyond 8 (WebGPU's default, which the trace needs),
-    /// up to [`dirt_shaders::MAX_CHUNKS`]. Fixed when the device is opened.
+    /// Bindings `array` is split across at most: one, and the storage
+    /// buffers the device allows per stage beyond 8 (WebGPU's default, which
+    /// the trace needs), dealt by [`BindingLimits::for_device`]: the list ids
+    /// first, then the offsets, the Hi-Z pyramid and the triangles in turn, up
+    /// to [`dirt_shaders::MAX_CHUNKS`] each. Fixed when the device is opened.
+    pub fn bindings(&self, array: dirt_core::SplitArray) -> u32 {
+        self.bindings.bindings(array)
+    }
+
+    /// [`Gpu::bindings`] of the list ids.
     pub fn id_bindings(&self) -> u32 {
-        self.id_bindings
+        self.bindings(Kind::Ids)
     }
 
-    /// Bindings the triangles are split across: one, and one more per storage
-    /// buffer left after [`Gpu::id_bindings`], up to [`dirt_shaders::MAX_CHUNKS`].
+    /// [`Gpu::bindings`] of the triangles.
     pub fn tri_bindings(&self) -> u32 {
-        self.tri_bindings
+        self.bindings(Kind::Tris)
     }
 
-    /// What this device binds, as it bounds a structure: read from
-    /// [`Gpu::limits`] each time (tests lower them) and [`Gpu::id_bindings`].
-    pub fn binding_limits(&self) -> dirt_core::BindingLimits {
-        dirt_core::BindingLimits {
+    /// What this device binds, as it bounds a structure: the binding size
+    /// read from [`Gpu::limits`] each time (tests lower it) and [`Gpu::bindings`].
+    pub fn binding_limits(&self) -> BindingLimits {
+        BindingLimits {
             max_binding: self
                 .limits
                 .max_storage_buffer_binding_size
                 .min(self.limits.max_buffer_size),
-            id_bindings: self.id_bindings,
-            tri_bindings: self.tri_bindings,
+            ..self.bindings
         }
     }
 
@@ -390,5 +403,11 @@ mod tests {
         assert!(!exact_path(wgpu::Backend::BrowserWebGpu, none, &default).0);
         let (exact, why) = exact_path(wgpu::Backend::Vulkan, pass, &plain);
         assert!(!exact && why.contains("plain WGSL"), "{why}");
+    }
+
+    /// The shaders declare as many chunks as the limits deal bindings.
+    #[test]
+    fn the_shaders_chunks_are_the_limits_bindings() {
+        assert_eq!(dirt_shaders::MAX_CHUNKS, BindingLimits::MAX_BINDINGS);
     }
 }

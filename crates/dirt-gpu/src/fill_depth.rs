@@ -2,19 +2,17 @@
 //! quad of every triangle; each fragment runs the exact tile test and updates
 //! the tile's `[zmin, zmax]` with atomic min/max. Mirrors `dirt_cpu::fill_depth`.
 
-use crate::chunked::Chunked;
-use crate::{BuildParams, Gpu, GpuError, bind_buffers, storage_init, with};
+use crate::chunked::{Chunked, Kind, Split};
+use crate::{BuildParams, Gpu, GpuError, bind_buffers, with};
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF};
 
-/// The Hi-Z buffer, every cell `[enc(+inf), enc(-inf)]` (empty).
-pub(crate) fn new_hiz_buffer(gpu: &Gpu, cells: u64) -> Result<wgpu::Buffer, GpuError> {
+/// The Hi-Z pyramid of `cells` cells, split across bindings, every cell
+/// `[enc(+inf), enc(-inf)]` (empty); an error naming the sizes when the
+/// device cannot bind them. Checked before the cells are made on the host.
+pub(crate) fn new_hiz(gpu: &Gpu, cells: u64) -> Result<Chunked, GpuError> {
+    Chunked::new(gpu, Kind::Hiz, cells)?;
     let init: Vec<[u32; 2]> = vec![[ORDERED_POS_INF, ORDERED_NEG_INF]; cells as usize];
-    Ok(storage_init(
-        gpu,
-        "hi-z",
-        bytemuck::cast_slice(&init),
-        wgpu::BufferUsages::COPY_SRC,
-    ))
+    Chunked::with_data(gpu, Kind::Hiz, bytemuck::cast_slice(&init))
 }
 
 /// A render target of one pixel per tile; nothing is written to it.
@@ -85,27 +83,28 @@ pub(crate) fn record_coverage(
     pass.draw(0..n_tris * 6, views);
 }
 
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn fill_depth(
     gpu: &Gpu,
+    split: Split,
     tris: &Chunked,
     views: &wgpu::Buffer,
     build_uniform: &wgpu::Buffer,
-    hiz: &wgpu::Buffer,
+    hiz: &Chunked,
     build: &BuildParams,
     content: &[u32],
 ) -> Result<(), GpuError> {
     if build.n_tris == 0 {
         return Ok(());
     }
-    let split = tris.is_split();
     let p = &gpu.pipelines_for(split)?.fill_depth;
     let bind = bind_buffers(
         gpu,
         "fill_depth",
         &p.get_bind_group_layout(0),
         &with(
-            &[(1, views), (2, build_uniform), (3, hiz)],
-            tris.bindings(gpu, split),
+            &[(1, views), (2, build_uniform)],
+            [tris.bindings(gpu, split), hiz.bindings(gpu, split)],
         ),
     );
     draw_coverage(gpu, p, &bind, build, content);

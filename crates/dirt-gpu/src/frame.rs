@@ -26,7 +26,7 @@
 //! owns its buffers; the caller owns the meshes, rays and hits, and must keep
 //! them alive until the submission completes (wgpu does this for it).
 
-use crate::chunked::{Chunked, Kind};
+use crate::chunked::{Chunked, Kind, Split};
 use crate::fill_depth::{record_coverage, tile_target};
 use crate::fill_primitives::{Scan, grid};
 use crate::gather::GpuMesh;
@@ -36,7 +36,6 @@ use crate::{
 };
 use dirt_core::{AdsParams, BuildTimings, CoreError};
 use dirt_math::ViewsKind;
-use dirt_math::dda::{hiz_levels, hiz_width};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
@@ -79,7 +78,8 @@ pub(crate) struct Frame {
     gather_params: Vec<wgpu::Buffer>,
     target: wgpu::TextureView,
     scan: Scan,
-    cursors: wgpu::Buffer,
+    /// The cursors of `fill`: a copy of the offsets, split alike.
+    cursors: Chunked,
     mip: MipDepth,
     n_lists: u64,
     cells: u64,
@@ -118,13 +118,15 @@ impl GpuAds {
             ViewsKind::Cube => 6,
             ViewsKind::Single => 1,
         };
-        let cells: u64 = (0..hiz_levels(tiles))
-            .map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_views as u64)
-            .sum();
-        crate::check_binding(gpu, "Hi-Z pyramid", cells * 8)?;
+        let cells = crate::hiz_cells(tiles, n_views);
         let n_lists = n_views as u64 * (tiles as u64).pow(2) * params.buckets as u64;
-        crate::check_binding(gpu, "list offsets", (n_lists + 1) * 4)?;
         let capacity = entries_hint.max(4);
+        let hiz = Chunked::new(gpu, Kind::Hiz, cells)?;
+        let offsets = Chunked::new(gpu, Kind::Offsets, n_lists + 1)?;
+        let cursors = Chunked::new(gpu, Kind::Offsets, n_lists + 1)?;
+        let ids = Chunked::new(gpu, Kind::Ids, capacity)?;
+        let tris = Chunked::new(gpu, Kind::Tris, 0)?;
+        let split = Split::of(&[&tris, &ids, &hiz, &offsets]);
 
         let template = crate::views::template(params.views, tiles);
         let views_uniform = crate::buffer_init(
@@ -133,15 +135,6 @@ impl GpuAds {
             bytemuck::cast_slice(&template),
             wgpu::BufferUsages::UNIFORM | STORAGE | COPY_SRC,
         );
-        let hiz = buffer(gpu, "hi-z", cells * 8, STORAGE | COPY_SRC);
-        let offsets = buffer(
-            gpu,
-            "lists",
-            (n_lists + 1) * 4,
-            STORAGE | COPY_SRC | COPY_DST,
-        );
-        let cursors = buffer(gpu, "cursors", (n_lists + 1) * 4, STORAGE | COPY_DST);
-        let ids = Chunked::new(gpu, Kind::Ids, capacity)?;
         let uniform = wgpu::BufferUsages::UNIFORM | COPY_DST;
         let frame = Frame {
             state: buffer(
@@ -164,9 +157,9 @@ impl GpuAds {
             ),
             gather_params: Vec::new(),
             target: tile_target(gpu, tiles),
-            scan: Scan::new(gpu, &offsets, n_lists + 1),
+            scan: Scan::new(gpu, split, &offsets, n_lists + 1)?,
             cursors,
-            mip: MipDepth::new(gpu, &hiz, tiles, n_views),
+            mip: MipDepth::new(gpu, split, &hiz, tiles, n_views)?,
             n_lists,
             cells,
             shared: Arc::default(),
@@ -182,7 +175,7 @@ impl GpuAds {
             timings: BuildTimings::default(),
             n_views,
             n_slots: n_views,
-            tris: Chunked::new(gpu, Kind::Tris, 0)?,
+            tris,
             views_uniform,
             hiz,
             offsets,
@@ -252,7 +245,7 @@ impl GpuAds {
         if needed > self.ids.capacity() {
             // The quarter of headroom only as far as the device binds; the
             // count itself must fit, or the build is refused by name.
-            let limit = gpu.binding_limits().id_capacity();
+            let limit = gpu.binding_limits().capacity(Kind::Ids);
             let capacity = (needed + needed / 4).min(limit.max(needed));
             self.ids = Chunked::new(gpu, Kind::Ids, capacity)?;
             frame.grown += 1;
@@ -265,7 +258,8 @@ impl GpuAds {
             buckets: self.params.buckets,
             id_shift: self.ids.shift(),
             tri_shift: self.tris.shift(),
-            ..Default::default()
+            hiz_shift: self.hiz.shift(),
+            offset_shift: self.offsets.shift(),
         };
         gpu.queue
             .write_buffer(&frame.build_params, 0, bytemuck::bytes_of(&build));
@@ -293,16 +287,20 @@ impl GpuAds {
         }
 
         // The pipelines for this structure's bindings, compiled if need be
-        // before anything is recorded: passes over the triangles, and over
-        // the triangles and the ids.
-        let tris_split = self.tris.is_split();
-        // (`GpuAds::is_split`, field by field: `frame` borrows `self.frame`.)
-        let all_split = tris_split || self.ids.is_split();
-        let pt = gpu.pipelines_for(tris_split)?;
-        let pa = gpu.pipelines_for(all_split)?;
+        // before anything is recorded (`GpuAds::split`, field by field:
+        // `frame` borrows `self.frame`); the kept dispatches remade when the
+        // triangles or the ids have come to take more bindings or fewer.
+        let split = Split::of(&[&self.tris, &self.ids, &self.hiz, &self.offsets]);
+        let pipelines = gpu.pipelines_for(split)?;
+        if frame.mip.split() != split {
+            frame.mip = MipDepth::new(gpu, split, &self.hiz, tiles, self.n_views)?;
+        }
+        if frame.scan.split() != split {
+            frame.scan = Scan::new(gpu, split, &self.offsets, frame.n_lists + 1)?;
+        }
 
         enc.clear_buffer(&frame.state, 0, None);
-        enc.clear_buffer(&self.offsets, 0, None);
+        self.offsets.encode_clear(enc);
         let mut first = 0u32;
         for (m, uniform) in meshes.iter().zip(&frame.gather_params) {
             gpu.queue.write_buffer(
@@ -310,12 +308,13 @@ impl GpuAds {
                 0,
                 bytemuck::bytes_of(&m.params(first, self.tris.shift())),
             );
-            crate::gather::record(gpu, pt, enc, m, uniform, &self.tris);
+            crate::gather::record(gpu, pipelines, split, enc, m, uniform, &self.tris);
             first += m.layout.triangles;
         }
         crate::views::record(
             gpu,
-            pt,
+            pipelines,
+            split,
             enc,
             &self.tris,
             &self.views_uniform,
@@ -325,76 +324,71 @@ impl GpuAds {
             self.n_views,
         );
         {
-            let p = &gpu.pipelines.clear_depth;
+            let p = &pipelines.clear_depth;
             let bind = bind_buffers(
                 gpu,
                 "clear_depth",
                 &p.get_bind_group_layout(0),
-                &[(3, &self.hiz)],
+                &with(&[(2, &frame.build_params)], [self.hiz.bindings(gpu, split)]),
             );
             let (x, y) = grid(gpu, frame.cells.div_ceil(64));
             crate::record_dispatch(enc, "clear_depth", p, &bind, [x, y, 1]);
         }
         if n_tris > 0 {
-            let fd = &pt.fill_depth;
+            let fd = &pipelines.fill_depth;
             let bind = bind_buffers(
                 gpu,
                 "fill_depth",
                 &fd.get_bind_group_layout(0),
                 &with(
-                    &[
-                        (1, &self.views_uniform),
-                        (2, &frame.build_params),
-                        (3, &self.hiz),
+                    &[(1, &self.views_uniform), (2, &frame.build_params)],
+                    [
+                        self.tris.bindings(gpu, split),
+                        self.hiz.bindings(gpu, split),
                     ],
-                    self.tris.bindings(gpu, tris_split),
                 ),
             );
             record_coverage(enc, &frame.target, fd, &bind, n_tris, 0..self.n_views);
         }
-        frame.mip.record(gpu, enc);
+        frame.mip.record(gpu, enc)?;
         if n_tris > 0 {
-            let count = &pt.count;
+            let count = &pipelines.count;
             let bind = bind_buffers(
                 gpu,
                 "fill_primitives count",
                 &count.get_bind_group_layout(0),
                 &with(
-                    &[
-                        (1, &self.views_uniform),
-                        (2, &frame.build_params),
-                        (3, &self.hiz),
-                        (4, &self.offsets),
+                    &[(1, &self.views_uniform), (2, &frame.build_params)],
+                    [
+                        self.tris.bindings(gpu, split),
+                        self.hiz.bindings(gpu, split),
+                        self.offsets.bindings(gpu, split),
                     ],
-                    self.tris.bindings(gpu, tris_split),
                 ),
             );
             record_coverage(enc, &frame.target, count, &bind, n_tris, 0..self.n_views);
         }
-        frame.scan.record(gpu, enc);
+        frame.scan.record(gpu, enc)?;
         if n_tris > 0 {
-            let bytes = (frame.n_lists + 1) * 4;
-            enc.copy_buffer_to_buffer(&self.offsets, 0, &frame.cursors, 0, bytes);
-            let fill = &pa.fill;
-            let mut buffers = with(
-                &[
-                    (1, &self.views_uniform),
-                    (2, &frame.build_params),
-                    (3, &self.hiz),
-                    (4, &frame.cursors),
-                ],
-                self.tris.bindings(gpu, all_split),
-            );
-            buffers.extend(self.ids.bindings(gpu, all_split));
+            self.offsets.encode_copy(enc, &frame.cursors);
+            let fill = &pipelines.fill;
             let bind = bind_buffers(
                 gpu,
                 "fill_primitives fill",
                 &fill.get_bind_group_layout(0),
-                &buffers,
+                &with(
+                    &[(1, &self.views_uniform), (2, &frame.build_params)],
+                    [
+                        self.tris.bindings(gpu, split),
+                        self.hiz.bindings(gpu, split),
+                        frame.cursors.bindings(gpu, split),
+                        self.ids.bindings(gpu, split),
+                    ],
+                ),
             );
             record_coverage(enc, &frame.target, fill, &bind, n_tris, 0..self.n_views);
         }
-        frame.record_feedback(gpu, enc, &self.offsets, self.ids.capacity());
+        frame.record_feedback(gpu, enc, &self.offsets, self.ids.capacity())?;
         frame.recorded += 1;
         self.n_tris = n_tris;
         Ok(())
@@ -409,9 +403,12 @@ impl Frame {
         &mut self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
-        offsets: &wgpu::Buffer,
+        offsets: &Chunked,
         capacity: u64,
-    ) {
+    ) -> Result<(), GpuError> {
+        let (total, total_at) = offsets
+            .locate(self.n_lists)
+            .ok_or_else(|| GpuError::Device("the list offsets have no total".into()))?;
         let free = self
             .staging
             .iter()
@@ -430,7 +427,7 @@ impl Frame {
         });
         let (buf, busy) = self.staging[k].clone();
         busy.store(true, Ordering::Release);
-        enc.copy_buffer_to_buffer(offsets, self.n_lists * 4, &buf, 0, 4);
+        enc.copy_buffer_to_buffer(total, total_at, &buf, 0, 4);
         let bad_at = std::mem::offset_of!(FrameState, bad) as u64;
         enc.copy_buffer_to_buffer(&self.state, bad_at, &buf, 4, 4);
         let shared = self.shared.clone();
@@ -451,5 +448,6 @@ impl Frame {
             }
             busy.store(false, Ordering::Release);
         });
+        Ok(())
     }
 }

@@ -3,7 +3,7 @@
 //! transform ([`dirt_core::gather::MeshLayout`]) — into the structure's
 //! triangle buffer, one thread per triangle. Mirrors `dirt_core::gather`.
 
-use crate::chunked::Chunked;
+use crate::chunked::{Chunked, Split};
 use crate::fill_primitives::grid;
 use crate::{GatherParams, Gpu, GpuError};
 use dirt_core::gather::{IndexFormat, MeshLayout};
@@ -87,10 +87,11 @@ fn words(buf: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
 
 /// Records the gather of `mesh` into `tris` from triangle `first_tri`, with
 /// its parameters already written to `uniform`; `pipelines` are
-/// [`Gpu::pipelines_for`]`(tris.is_split())`.
+/// [`Gpu::pipelines_for`]`(split)`.
 pub(crate) fn record(
     gpu: &Gpu,
     pipelines: &crate::Pipelines,
+    split: Split,
     enc: &mut wgpu::CommandEncoder,
     mesh: &GpuMesh<'_>,
     uniform: &wgpu::Buffer,
@@ -107,7 +108,7 @@ pub(crate) fn record(
     ]
     .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
     .into();
-    entries.extend(crate::whole(tris.bindings(gpu, tris.is_split())));
+    entries.extend(crate::whole(tris.bindings(gpu, split)));
     let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("gather"),
         layout: &p.get_bind_group_layout(0),

@@ -97,9 +97,9 @@ pub enum GpuError {
         bytes: u64,
         limit: u64,
     },
-    /// The list ids or the triangles need more than the device binds, split
-    /// across [`Gpu::id_bindings`] or [`Gpu::tri_bindings`] bindings (see
-    /// [`dirt_core::BindingLimits`]).
+    /// An array of the structure (triangles, Hi-Z pyramid, list offsets,
+    /// list ids) needs more than the device binds, split across
+    /// [`Gpu::bindings`] bindings (see [`dirt_core::BindingLimits`]).
     #[error(
         "{what} need {bytes} bytes; this device binds at most {bindings} × {per_binding} bytes of them (max_storage_buffers_per_shader_stage, max_storage_buffer_binding_size): use a lower resolution, fewer buckets or a smaller scene"
     )]
@@ -123,7 +123,7 @@ pub enum GpuError {
 }
 
 /// Compiled pipelines, made once per device for one binding per split array, and once more
-/// for the device's bindings when a structure first needs them ([`Gpu::pipelines_for`]).
+/// per set of split arrays when a structure first needs it ([`Gpu::pipelines_for`]).
 #[derive(Debug)]
 pub(crate) struct Pipelines {
     fill_depth: wgpu::RenderPipeline,
@@ -293,23 +293,16 @@ pub struct GpuAds {
     /// The triangles, split across bindings ([`chunked`]).
     pub(crate) tris: chunked::Chunked,
     pub(crate) views_uniform: wgpu::Buffer,
-    /// All Hi-Z levels, level 0 (the depth bounds) first; two u32 per cell.
-    pub(crate) hiz: wgpu::Buffer,
-    /// `slots·tiles²·B + 1` offsets after the scan (views without content have none).
-    pub(crate) offsets: wgpu::Buffer,
+    /// All Hi-Z levels, level 0 (the depth bounds) first; two u32 per cell;
+    /// split across bindings ([`chunked`]).
+    pub(crate) hiz: chunked::Chunked,
+    /// `slots·tiles²·B + 1` offsets after the scan (views without content
+    /// have none); split across bindings ([`chunked`]).
+    pub(crate) offsets: chunked::Chunked,
     /// The list ids, split across bindings ([`chunked`]).
     pub(crate) ids: chunked::Chunked,
     /// The kept parts of a frame structure ([`GpuAds::frame`]).
     pub(crate) frame: Option<Box<frame::Frame>>,
-}
-
-/// Checks that one binding of `bytes` fits the adapter.
-pub(crate) fn check_binding(gpu: &Gpu, what: &'static str, bytes: u64) -> Result<(), GpuError> {
-    let limit = gpu.limits.max_storage_buffer_binding_size;
-    if bytes > limit {
-        return Err(GpuError::TooLarge { what, bytes, limit });
-    }
-    Ok(())
 }
 
 /// A zeroed buffer of `bytes` (at least 16, a multiple of 4: empty bindings are invalid).
@@ -371,13 +364,13 @@ pub(crate) fn buffer_init(
     buf
 }
 
-/// `fixed` and then the split array's `chunks`: the `(binding, buffer)` pairs of a bind group.
-pub(crate) fn with<'a>(
+/// `fixed` and then the split arrays' chunks: the `(binding, buffer)` pairs of a bind group.
+pub(crate) fn with<'a, const N: usize>(
     fixed: &[(u32, &'a wgpu::Buffer)],
-    chunks: Vec<(u32, &'a wgpu::Buffer)>,
+    arrays: [Vec<(u32, &'a wgpu::Buffer)>; N],
 ) -> Vec<(u32, &'a wgpu::Buffer)> {
     let mut out = fixed.to_vec();
-    out.extend(chunks);
+    out.extend(arrays.into_iter().flatten());
     out
 }
 
@@ -467,6 +460,13 @@ pub(crate) fn map_read(gpu: &Gpu, staging: &wgpu::Buffer) -> Result<Vec<u8>, Gpu
     Ok(out)
 }
 
+/// Cells of every Hi-Z level of `n_slots` views of `tiles`² tiles.
+pub(crate) fn hiz_cells(tiles: u32, n_slots: u32) -> u64 {
+    (0..hiz_levels(tiles))
+        .map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_slots as u64)
+        .sum()
+}
+
 /// The views as the shaders read them: always six entries (unused ones zero).
 pub(crate) fn views_gpu(views: &ViewSet) -> [ViewGpu; 6] {
     let mut out = [ViewGpu::default(); 6];
@@ -501,16 +501,15 @@ impl GpuAds {
         let n_tris = u32::try_from(tris.len()).map_err(|_| {
             CoreError::InvalidParams(format!("{} triangles is more than 2^32-1", tris.len()))
         })?;
-        // Everything that must fit its bindings is checked before any work starts.
+        // Everything that must fit its bindings is checked before any work
+        // starts, in this order: triangles, Hi-Z pyramid, offsets (the ids once counted).
         let tri_buf =
             chunked::Chunked::with_data(gpu, chunked::Kind::Tris, bytemuck::cast_slice(tris))?;
-        let levels = hiz_levels(tiles);
-        let cells: u64 = (0..levels)
-            .map(|l| (hiz_width(tiles, l) as u64).pow(2) * n_slots as u64)
-            .sum();
-        check_binding(gpu, "Hi-Z pyramid", cells * 8)?;
+        let cells = hiz_cells(tiles, n_slots);
         let n_lists = n_slots as u64 * (tiles as u64).pow(2) * params.buckets as u64;
-        check_binding(gpu, "list offsets", (n_lists + 1) * 4)?;
+        let hiz = fill_depth::new_hiz(gpu, cells)?;
+        // Counts, then (after the scan) offsets; one more so that offsets[n_lists] is the total.
+        let offsets = chunked::Chunked::new(gpu, chunked::Kind::Offsets, n_lists + 1)?;
 
         let views_uniform = uniform_init(gpu, "views", bytemuck::cast_slice(&views_gpu(&views)));
         let build = BuildParams {
@@ -518,16 +517,18 @@ impl GpuAds {
             n_views,
             tiles,
             buckets: params.buckets,
-            id_shift: gpu.binding_limits().id_shift(),
+            id_shift: gpu.binding_limits().shift(chunked::Kind::Ids),
             tri_shift: tri_buf.shift(),
-            ..Default::default()
+            hiz_shift: hiz.shift(),
+            offset_shift: offsets.shift(),
         };
         let build_uniform = uniform_init(gpu, "build params", bytemuck::bytes_of(&build));
-        let hiz = fill_depth::new_hiz_buffer(gpu, cells)?;
+        let split = chunked::Split::of(&[&tri_buf, &hiz]);
 
         let t0 = Instant::now();
         fill_depth::fill_depth(
             gpu,
+            split,
             &tri_buf,
             &views_uniform,
             &build_uniform,
@@ -536,14 +537,15 @@ impl GpuAds {
             &content,
         )?;
         let t1 = Instant::now();
-        mip_depth::mip_depth(gpu, &hiz, tiles, n_slots)?;
+        mip_depth::mip_depth(gpu, split, &hiz, tiles, n_slots)?;
         let t2 = Instant::now();
-        let (offsets, ids, nodes) = fill_primitives::fill_primitives(
+        let (ids, nodes) = fill_primitives::fill_primitives(
             gpu,
             &tri_buf,
             &views_uniform,
             &build_uniform,
             &hiz,
+            &offsets,
             &build,
             &content,
             n_lists,
@@ -570,10 +572,10 @@ impl GpuAds {
         })
     }
 
-    /// Whether the triangles or the ids take more than one binding: the
-    /// passes that bind both then need [`Gpu::pipelines_for`]`(true)`.
-    pub(crate) fn is_split(&self) -> bool {
-        self.tris.is_split() || self.ids.is_split()
+    /// Which of the structure's arrays take more than one binding: the
+    /// pipelines its passes run are [`Gpu::pipelines_for`] that.
+    pub(crate) fn split(&self) -> chunked::Split {
+        chunked::Split::of(&[&self.tris, &self.ids, &self.hiz, &self.offsets])
     }
 
     /// Buffers the list ids take (one per binding they need; see [`Gpu::id_bindings`]).
@@ -586,10 +588,20 @@ impl GpuAds {
         self.tris.chunks()
     }
 
+    /// Buffers the Hi-Z pyramid takes (one per binding it needs; see [`Gpu::bindings`]).
+    pub fn hiz_chunks(&self) -> usize {
+        self.hiz.chunks()
+    }
+
+    /// Buffers the list offsets take (one per binding they need; see [`Gpu::bindings`]).
+    pub fn offset_chunks(&self) -> usize {
+        self.offsets.chunks()
+    }
+
     /// Bytes of the structure on the GPU: the Hi-Z pyramid (depth bounds
     /// included), list offsets and ids, as allocated.
     pub fn memory_bytes(&self) -> u64 {
-        self.hiz.size() + self.offsets.size() + self.ids.bytes()
+        self.hiz.bytes() + self.offsets.bytes() + self.ids.bytes()
     }
 
     /// The views as the passes read them (six entries; a view without
@@ -602,14 +614,16 @@ impl GpuAds {
     /// Hi-Z levels read back, level 0 (the depth bounds) first, in the CPU's layout.
     pub fn read_hiz(&self, gpu: &Gpu) -> Result<Vec<Vec<[u32; 2]>>, GpuError> {
         let tiles = self.params.tiles();
-        let n_slots = self.n_slots as u64;
+        let cells = bytemuck::pod_collect_to_vec::<u8, [u32; 2]>(
+            &self.hiz.read(gpu, hiz_cells(tiles, self.n_slots))?,
+        );
+        let mut rest = cells.as_slice();
         let mut out = Vec::new();
-        let mut base = 0u64;
         for l in 0..hiz_levels(tiles) {
-            let n = (hiz_width(tiles, l) as u64).pow(2) * n_slots;
-            let bytes = read_back(gpu, &self.hiz, base * 8, n * 8)?;
-            out.push(bytemuck::pod_collect_to_vec::<u8, [u32; 2]>(&bytes));
-            base += n;
+            let n = (hiz_width(tiles, l) as usize).pow(2) * self.n_slots as usize;
+            let (level, more) = rest.split_at(n.min(rest.len()));
+            out.push(level.to_vec());
+            rest = more;
         }
         Ok(out)
     }
@@ -618,12 +632,8 @@ impl GpuAds {
     pub fn read_lists(&self, gpu: &Gpu) -> Result<IdLists, GpuError> {
         let n_lists =
             self.n_slots as u64 * (self.params.tiles() as u64).pow(2) * self.params.buckets as u64;
-        let offsets = bytemuck::pod_collect_to_vec::<u8, u32>(&read_back(
-            gpu,
-            &self.offsets,
-            0,
-            (n_lists + 1) * 4,
-        )?);
+        let offsets =
+            bytemuck::pod_collect_to_vec::<u8, u32>(&self.offsets.read(gpu, n_lists + 1)?);
         let total = offsets.last().copied().unwrap_or(0) as u64;
         if total > self.ids.capacity() {
             return Err(GpuError::TooLarge {

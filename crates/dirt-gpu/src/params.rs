@@ -11,15 +11,17 @@ pub struct BuildParams {
     pub n_views: u32,
     pub tiles: u32,
     pub buckets: u32,
-    /// List ids per chunk: `2^id_shift` ([`dirt_core::BindingLimits::id_shift`]).
+    /// List ids per chunk: `2^id_shift`.
     pub id_shift: u32,
-    /// Triangles per chunk: `2^tri_shift` ([`dirt_core::BindingLimits::tri_shift`]).
+    /// Triangles per chunk: `2^tri_shift`.
     pub tri_shift: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
+    /// Hi-Z cells per chunk: `2^hiz_shift`.
+    pub hiz_shift: u32,
+    /// List offsets (counters, cursors) per chunk: `2^offset_shift`.
+    pub offset_shift: u32,
 }
 
-/// `struct MipParams` of `mip_depth.wgsl`. repr(C), Pod, 16 bytes.
+/// `struct MipParams` of `mip_depth.wgsl`. repr(C), Pod, 32 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct MipParams {
@@ -27,6 +29,11 @@ pub struct MipParams {
     pub dst_base: u32,
     pub src_w: u32,
     pub dst_w: u32,
+    /// Hi-Z cells per chunk: `2^shift`.
+    pub shift: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// `struct ScanParams` of `fill_primitives.wgsl`. repr(C), Pod, 16 bytes.
@@ -34,7 +41,8 @@ pub struct MipParams {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct ScanParams {
     pub n: u32,
-    pub _pad0: u32,
+    /// Elements per data chunk: `2^shift`.
+    pub shift: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }
@@ -58,15 +66,17 @@ pub struct TraceParams {
     pub capacity: u32,
     /// 1: write per-ray statistics.
     pub with_stats: u32,
-    /// List ids per chunk: `2^id_shift` ([`dirt_core::BindingLimits::id_shift`]).
+    /// List ids per chunk: `2^id_shift`.
     pub id_shift: u32,
     /// List ids the chunks hold: a larger scan total means the lists did not fit.
     pub id_capacity: u32,
-    /// Triangles per chunk: `2^tri_shift` ([`dirt_core::BindingLimits::tri_shift`]).
+    /// Triangles per chunk: `2^tri_shift`.
     pub tri_shift: u32,
+    /// Hi-Z cells per chunk: `2^hiz_shift`.
+    pub hiz_shift: u32,
+    /// List offsets per chunk: `2^offset_shift`.
+    pub offset_shift: u32,
     pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
 }
 
 /// `struct PoolHeader` of `trace.wgsl`: the head of the continuation pool.

@@ -104,8 +104,8 @@ pub struct TraceResources {
     dispatch: wgpu::Buffer,
     no_stats: wgpu::Buffer,
     params: HashMap<TraceParams, wgpu::Buffer>,
-    /// The last trace's bind group, and whether it is for split bindings.
-    bind: Option<(wgpu::BindGroup, bool)>,
+    /// The last trace's bind group, and the split arrays of its pipelines.
+    bind: Option<(wgpu::BindGroup, crate::chunked::Split)>,
     schedule_bind: Option<wgpu::BindGroup>,
 }
 
@@ -281,7 +281,7 @@ impl TraceResources {
         }
         // The structure's bindings choose the pipelines (compiled if need
         // be), before anything is recorded.
-        let split = ads.is_split();
+        let split = ads.split();
         let pipelines = gpu.pipelines_for(split)?;
         self.ensure_pool(gpu, count)?;
         let Some(pool) = self.pool.clone() else {
@@ -310,6 +310,8 @@ impl TraceResources {
             id_shift: ads.ids.shift(),
             id_capacity: ads.ids.capacity().min(u32::MAX as u64) as u32,
             tri_shift: ads.tris.shift(),
+            hiz_shift: ads.hiz.shift(),
+            offset_shift: ads.offsets.shift(),
             ..Default::default()
         };
         let uniform = self
@@ -326,19 +328,20 @@ impl TraceResources {
             (1, binding(hits, n * 16)),
             (3, ads.views_uniform.as_entire_binding()),
             (4, uniform.as_entire_binding()),
-            (5, ads.hiz.as_entire_binding()),
-            (6, ads.offsets.as_entire_binding()),
             (8, binding(stats_buf, stats_bytes)),
             (9, pool.as_entire_binding()),
         ]
         .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
         .into();
-        entries.extend(crate::whole(
-            ads.ids
-                .bindings(gpu, split)
-                .into_iter()
-                .chain(ads.tris.bindings(gpu, split)),
-        ));
+        entries.extend(crate::whole(crate::with(
+            &[],
+            [
+                ads.ids.bindings(gpu, split),
+                ads.tris.bindings(gpu, split),
+                ads.hiz.bindings(gpu, split),
+                ads.offsets.bindings(gpu, split),
+            ],
+        )));
         let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace"),
             layout: &pipelines.trace.get_bind_group_layout(0),

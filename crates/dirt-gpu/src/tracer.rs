@@ -107,7 +107,7 @@ impl<'g> DirtGpu<'g> {
         })?;
         let gpu = self.gpu;
         // One mesh per binding's worth: gather binds each vertex buffer whole.
-        let per = 1usize << gpu.binding_limits().tri_shift();
+        let per = 1usize << gpu.binding_limits().shift(dirt_core::SplitArray::Tris);
         let uploads: Vec<(wgpu::Buffer, u32)> = tris
             .chunks(per)
             .map(|part| {

@@ -7,7 +7,7 @@
 //! does not wait to learn which views have content, so every view's block is
 //! allocated.
 
-use crate::chunked::Chunked;
+use crate::chunked::{Chunked, Split};
 use crate::fill_primitives::grid;
 use crate::{Gpu, bind_buffers, record_dispatch, with};
 use dirt_math::{Aabb, Vec3, ViewGpu, ViewSet, ViewsKind};
@@ -29,11 +29,12 @@ pub(crate) fn template(kind: ViewsKind, tiles: u32) -> [ViewGpu; 6] {
 
 /// Records the four entries over `n_tris` triangles in `tris`: `state` must
 /// be zero (cleared in the same encoder) and `params` written; `pipelines`
-/// are [`Gpu::pipelines_for`]`(tris.is_split())`.
+/// are [`Gpu::pipelines_for`]`(split)`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn record(
     gpu: &Gpu,
     pipelines: &crate::Pipelines,
+    split: Split,
     enc: &mut wgpu::CommandEncoder,
     tris: &Chunked,
     views: &wgpu::Buffer,
@@ -49,7 +50,7 @@ pub(crate) fn record(
         &bounds.get_bind_group_layout(0),
         &with(
             &[(1, views), (2, state), (3, params)],
-            tris.bindings(gpu, tris.is_split()),
+            [tris.bindings(gpu, split)],
         ),
     );
     let (x, y) = grid(gpu, (n_tris as u64).div_ceil(64));
