@@ -36,6 +36,12 @@
 //!   divisions from one band to the next. A tile's pair of minor-axis cuts
 //!   is kept for the next band, whose first tile is usually the last tile of
 //!   this one.
+//! - Without statistics, a triangle already tested by this ray is not
+//!   tested again (a mailbox of recent ids per thread, [`MAILBOX`] entries
+//!   tagged with the ray): a triangle listed in several tiles and buckets
+//!   along the ray gives the same candidate each time, which the best hit
+//!   either already is or already beats, so skipping it changes no bit. With
+//!   statistics every listed triangle is tested, as the plain stage counts.
 //! - Batches of [`ORDER_MIN_RAYS`] rays or more are traced in a coherent
 //!   order ([`coherent_order`]: direction face, then Morton code of the
 //!   origin); the results go back to input order.
@@ -389,6 +395,9 @@ pub(crate) fn coherent_order(rays: &[Ray]) -> Option<Vec<u64>> {
     Some(order)
 }
 
+/// Entries of the per-thread mailbox of tested triangle ids (a power of two).
+pub(crate) const MAILBOX: usize = 256;
+
 /// A cell of the Hi-Z walk waiting on the stack: level, `i`, `j`, and the
 /// ray's interval in it.
 type Waiting = (u32, u32, u32, Interval);
@@ -404,6 +413,10 @@ pub(crate) struct Scratch {
     stack: Vec<Waiting>,
     x: [[(Cut, Cut); 2]; MAX_LEVELS],
     y: [[(Cut, Cut); 2]; MAX_LEVELS],
+    /// `ray << 32 | id` of the triangle last tested at slot `id % MAILBOX`.
+    mailbox: Vec<u64>,
+    /// The ray's tag; the mailbox is cleared before it would repeat.
+    ray: u32,
 }
 
 impl Scratch {
@@ -412,6 +425,18 @@ impl Scratch {
             stack: vec![(0, 0, 0, Interval::EMPTY); STACK],
             x: [[(Cut::NONE, Cut::NONE); 2]; MAX_LEVELS],
             y: [[(Cut::NONE, Cut::NONE); 2]; MAX_LEVELS],
+            mailbox: vec![u64::MAX; MAILBOX],
+            ray: 0,
+        }
+    }
+
+    /// A new ray: its tag, never one an entry holds.
+    fn next_ray(&mut self) {
+        if self.ray >= u32::MAX - 1 {
+            self.mailbox.fill(u64::MAX);
+            self.ray = 0;
+        } else {
+            self.ray += 1;
         }
     }
 }
@@ -452,6 +477,9 @@ pub(crate) fn trace_ray<const STATS: bool>(
             (ivs[f], exits[f]) = clip_to_view(v, &vr, ray.tmin, ray.tmax);
         }
         vrs[f] = vr;
+    }
+    if !STATS {
+        scratch.next_ray();
     }
     let mut st = RayState::<STATS> {
         sc,
@@ -801,6 +829,14 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
                 self.stats.tests += ids.len() as u32;
             }
             for &id in ids {
+                if !STATS {
+                    let tag = u64::from(self.scratch.ray) << 32 | u64::from(id);
+                    let slot = &mut self.scratch.mailbox[id as usize % MAILBOX];
+                    if *slot == tag {
+                        continue;
+                    }
+                    *slot = tag;
+                }
                 intersect_closest(self.ray, &self.sh, &sc.tris[id as usize], id, &mut best);
             }
         }
@@ -824,6 +860,23 @@ mod tests {
             }
             assert_eq!(spread3(x), want);
         }
+    }
+
+    /// A ray's tag is never one the mailbox holds, even when the tags wrap.
+    #[test]
+    fn the_mailbox_is_cleared_before_tags_repeat() {
+        let mut s = Scratch::new();
+        assert!(s.mailbox.iter().all(|&e| e >> 32 != u64::from(s.ray)));
+        s.mailbox[3] = u64::from(u32::MAX - 2) << 32 | 3;
+        s.ray = u32::MAX - 3;
+        s.next_ray();
+        assert_eq!(s.ray, u32::MAX - 2);
+        s.next_ray();
+        assert_eq!(s.ray, u32::MAX - 1);
+        assert_eq!(s.mailbox[3] >> 32, u64::from(u32::MAX - 2));
+        s.next_ray();
+        assert_eq!(s.ray, 0);
+        assert!(s.mailbox.iter().all(|&e| e == u64::MAX));
     }
 
     #[test]
