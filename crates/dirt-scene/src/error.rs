@@ -159,6 +159,17 @@ pub enum SceneError {
     #[error("{}: scene too large: {problem}", .path.display())]
     TooLarge { path: PathBuf, problem: String },
 
+    /// A glTF animation, skin or morph target is unusable (a sampler whose
+    /// key and value counts disagree, a NaN or decreasing key, a joint index
+    /// past the skin's joints, weights that do not sum to one, ...), or
+    /// posing it gave a non-finite vertex.
+    #[error("{}: {location}: {problem}", .path.display())]
+    Animation {
+        path: PathBuf,
+        location: String,
+        problem: String,
+    },
+
     /// [`open`](crate::open) was given a name that is neither a built-in
     /// scene nor an existing file.
     #[error(

@@ -20,6 +20,10 @@
 //!   glTF, `.obj` → OBJ, anything else → [`SceneError::UnsupportedExtension`].
 //! * [`builtin`]`(name)`, [`builtin_scaled`]`(name, scale, offset)`,
 //!   [`Scene::transformed`].
+//! * [`open_animated`]`(spec)`, [`load_animated`]`(path)`: a scene that
+//!   moves, [`AnimatedScene::pose`]`(t)` writing its triangles, normals,
+//!   cameras and lights at time `t` (glTF node animation, skins, morph
+//!   targets); anything else opens as a fixed [`AnimatedScene`].
 //!
 //! Loading never panics on any input: malformed files give a [`SceneError`]
 //! naming the file and, for geometry problems, the mesh, primitive and
@@ -80,8 +84,9 @@
 //!   node's child, in node index order. A node reached twice (not a glTF
 //!   tree, but not a cycle either) is instanced twice; a cycle is
 //!   [`SceneError::RecursiveNodes`]. Node transforms compose as
-//!   `global = parent_global * local`. Skins and morph targets are ignored
-//!   (bind pose / base geometry). Cameras and lights are listed in the same
+//!   `global = parent_global * local`. [`load`] ignores animations, skins and
+//!   morph targets (bind pose, base geometry); [`load_animated`] keeps them
+//!   and poses the same triangles at any time (see [`AnimatedScene`]). Cameras and lights are listed in the same
 //!   traversal order.
 //!
 //!   Validation is the `gltf` crate's, with two relaxations (each recorded
@@ -105,6 +110,7 @@
 //! identical on every run; only `sin`/`cos` of the platform's maths library
 //! could make the last bits differ between platforms.
 
+mod animation;
 mod builder;
 mod builtin;
 mod error;
@@ -114,6 +120,7 @@ mod obj_loader;
 
 use std::path::Path;
 
+pub use animation::{AnimatedScene, ClipInfo, load_animated, open_animated};
 pub use builtin::{BUILTIN_NAMES, DEFAULT_SCENE, builtin, builtin_scaled};
 pub use dirt_math::{Aabb, Triangle, Vec3};
 pub use error::SceneError;
@@ -312,7 +319,16 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             });
         }
     };
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| loader(path)));
+    catch_panics(path, || loader(path))
+}
+
+/// Runs a loader, turning a panic inside it (a bug, here or in a
+/// dependency) into [`SceneError::Internal`].
+pub(crate) fn catch_panics<T>(
+    path: &Path,
+    loader: impl FnOnce() -> Result<T, SceneError>,
+) -> Result<T, SceneError> {
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(loader));
     match result {
         Ok(r) => r,
         Err(payload) => {

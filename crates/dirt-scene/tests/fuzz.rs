@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{data_uri, f32_bytes, glb, load_no_panic, write};
+use common::{assimp_models, data_uri, f32_bytes, glb, load_no_panic, write};
 use proptest::prelude::*;
 
 /// A small document using most features; `with_image` adds an image whose
@@ -120,6 +120,13 @@ proptest! {
     fn mutated_glb(edits in prop::collection::vec((any::<usize>(), any::<u8>(), interesting_byte()), 1..6)) {
         let dir = tempfile::tempdir().unwrap();
         let _ = load_no_panic(&write(dir.path(), "f.glb", mutate(&seed_glb(), &edits)));
+    }
+
+    #[test]
+    fn mutated_skin(edits in prop::collection::vec((any::<usize>(), any::<u8>(), interesting_byte()), 1..6)) {
+        let seed = std::fs::read(assimp_models().join("glTF2/simple_skin/simple_skin.gltf")).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let _ = load_no_panic(&write(dir.path(), "f.gltf", mutate(&seed, &edits)));
     }
 
     #[test]

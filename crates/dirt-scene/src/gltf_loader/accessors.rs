@@ -164,9 +164,13 @@ fn read_elements(
 /// components, with every offset, stride and index checked.
 fn read_accessor(buffers: &[gltf::buffer::Data], acc: &gltf::Accessor) -> Result<Vec<f64>, String> {
     let dims = acc.dimensions();
-    if matches!(dims, Dimensions::Mat2 | Dimensions::Mat3 | Dimensions::Mat4) {
+    // Matrix columns of 1- and 2-byte components are padded to 4 bytes;
+    // only 4-byte components (inverse bind matrices are float) are packed.
+    if matches!(dims, Dimensions::Mat2 | Dimensions::Mat3 | Dimensions::Mat4)
+        && component_size(acc.data_type()) != 4
+    {
         return Err(format!(
-            "accessor {}: matrix accessors are not supported here",
+            "accessor {}: matrix accessors of 1- or 2-byte components are not supported",
             acc.index()
         ));
     }

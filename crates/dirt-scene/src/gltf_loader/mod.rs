@@ -20,24 +20,39 @@
 //! * [`primitives`]: mesh primitives to world-space triangles (triangle
 //!   modes, index resolution, normals and texture coordinates);
 //! * [`accessors`]: bounds-checked decoding of accessors, buffer views and
-//!   sparse substitution.
+//!   sparse substitution;
+//! * [`rig`]: for [`load_gltf_animated`], what the walk records of each mesh
+//!   instance, camera and light, and the nodes, skins, morph targets and
+//!   animation clips an [`AnimatedScene`] poses with.
 
 mod accessors;
 mod materials;
 mod nodes;
 mod primitives;
+mod rig;
 mod validation;
 
 use std::path::Path;
 
 use crate::builder::SceneBuilder;
-use crate::{Scene, SceneError, read_file, stem};
+use crate::{AnimatedScene, Scene, SceneError, read_file, stem};
 
 use materials::{convert_image, convert_material};
+pub(crate) use nodes::node_frame;
 use nodes::{root_nodes, traverse};
+use rig::Recorder;
 use validation::{check_external, check_views, parse};
 
 pub(crate) fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
+    load(path, false).map(|a| a.scene)
+}
+
+/// Loads a glTF file with what it takes to pose it (see [`AnimatedScene`]).
+pub(crate) fn load_gltf_animated(path: &Path) -> Result<AnimatedScene, SceneError> {
+    load(path, true)
+}
+
+fn load(path: &Path, animated: bool) -> Result<AnimatedScene, SceneError> {
     let bytes = read_file(path)?;
     let gltf_err = |source| SceneError::Gltf {
         path: path.to_path_buf(),
@@ -57,6 +72,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
         path,
         buffers: &buffers,
         b: SceneBuilder::new(&stem(path)),
+        rig: animated.then(Recorder::default),
     };
     ctx.b.scene.warnings = warnings;
 
@@ -77,13 +93,25 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
 
     let roots = root_nodes(&document, &mut ctx.b);
     traverse(&mut ctx, &document, &roots)?;
-    Ok(ctx.b.finish())
+    match ctx.rig.take() {
+        Some(recorder) => {
+            let rig = rig::build(&ctx, &document, recorder)?;
+            let scene = ctx.b.finish();
+            match rig {
+                Some(rig) => AnimatedScene::rigged(scene, rig),
+                None => Ok(AnimatedScene::fixed(scene)),
+            }
+        }
+        None => Ok(AnimatedScene::fixed(ctx.b.finish())),
+    }
 }
 
 struct Ctx<'a> {
     path: &'a Path,
     buffers: &'a [gltf::buffer::Data],
     b: SceneBuilder,
+    /// What the walk records for posing, when loading an animated scene.
+    rig: Option<Recorder>,
 }
 
 impl Ctx<'_> {

@@ -70,6 +70,9 @@ pub(super) fn traverse(
                 if let Some(f) = on_path.get_mut(i) {
                     *f = false;
                 }
+                if let Some(r) = ctx.rig.as_mut() {
+                    r.path.pop();
+                }
                 continue;
             }
             Step::Enter(i, parent) => (i, parent),
@@ -95,6 +98,9 @@ pub(super) fn traverse(
         if let Some(f) = on_path.get_mut(index) {
             *f = true;
         }
+        if let Some(r) = ctx.rig.as_mut() {
+            r.path.push(index);
+        }
 
         let global = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         let label = node_label(node);
@@ -108,7 +114,9 @@ pub(super) fn traverse(
         }
 
         if let Some(mesh) = node.mesh() {
-            if node.skin().is_some() && !warned_skin {
+            if let Some(r) = ctx.rig.as_mut() {
+                r.enter_mesh(node.skin().map(|s| s.index()), mesh.weights());
+            } else if node.skin().is_some() && !warned_skin {
                 warned_skin = true;
                 ctx.b.warn(
                     "skinning is ignored; skinned meshes are loaded in bind pose".to_string(),
@@ -151,7 +159,7 @@ fn node_label(node: &gltf::Node) -> String {
 }
 
 /// Node -Z as forward and +Y as up, or `None` for a degenerate transform.
-fn node_frame(global: Mat4) -> Option<(Vec3, Vec3, Vec3)> {
+pub(crate) fn node_frame(global: Mat4) -> Option<(Vec3, Vec3, Vec3)> {
     let position = global.transform_point3(Vec3::ZERO);
     let forward = global.transform_vector3(Vec3::NEG_Z).try_normalize()?;
     let (forward, up) = orthonormal_up(forward, global.transform_vector3(Vec3::Y));
@@ -194,6 +202,9 @@ fn add_camera(ctx: &mut Ctx, camera: &gltf::Camera, global: Mat4, label: &str) {
         },
     };
     ctx.b.scene.cameras.push(cam);
+    if let Some(r) = ctx.rig.as_mut() {
+        r.cameras.push(r.path.clone());
+    }
 }
 
 fn add_light(ctx: &mut Ctx, light: &gltf::khr_lights_punctual::Light, global: Mat4, label: &str) {
@@ -223,4 +234,7 @@ fn add_light(ctx: &mut Ctx, light: &gltf::khr_lights_punctual::Light, global: Ma
         intensity: light.intensity(),
         range: light.range(),
     });
+    if let Some(r) = ctx.rig.as_mut() {
+        r.lights.push(r.path.clone());
+    }
 }

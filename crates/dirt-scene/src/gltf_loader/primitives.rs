@@ -86,6 +86,8 @@ pub(super) fn read_primitive(
     }
     let material = prim.material().index().map_or(0, |i| i as u32 + 1);
 
+    let first = ctx.b.len();
+    let mut corner_list = ctx.rig.is_some().then(Vec::new);
     let mut bad_normals = 0usize;
     let mut bad_uvs = 0usize;
     for corners in triangle_corners(mode, len) {
@@ -105,6 +107,9 @@ pub(super) fn read_primitive(
                 });
             }
             vidx[c] = v;
+        }
+        if let Some(list) = corner_list.as_mut() {
+            list.push(vidx.map(|v| v as u32));
         }
         let mut world = [Vec3::ZERO; 3];
         for c in 0..3 {
@@ -159,6 +164,9 @@ pub(super) fn read_primitive(
             });
         }
         ctx.b.push(tri, material, tri_normals, tri_uvs);
+    }
+    if let Some(corners) = corner_list {
+        super::rig::record_primitive(ctx, location, prim, first, corners, &positions, normals)?;
     }
     if bad_normals > 0 {
         ctx.b.warn(format!(

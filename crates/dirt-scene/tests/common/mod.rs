@@ -71,7 +71,30 @@ pub fn load_no_panic(path: &Path) -> Result<dirt_scene::Scene, dirt_scene::Scene
         s.validate()
             .unwrap_or_else(|e| panic!("{}: invariant broken: {e}", path.display()));
     }
+    animate_no_panic(path);
     r
+}
+
+/// Loads `path` with its animations and poses it at a few times, asserting
+/// that nothing panics and that every pose keeps the scene's invariants.
+pub fn animate_no_panic(path: &Path) {
+    let r = std::panic::catch_unwind(|| {
+        let mut s = dirt_scene::load_animated(path)?;
+        for t in [0.0, 0.3, 1.0, 1e9, -1.0] {
+            s.pose(t)?;
+            s.scene
+                .validate()
+                .unwrap_or_else(|e| panic!("{}: pose at {t}: {e}", path.display()));
+        }
+        Ok::<_, dirt_scene::SceneError>(())
+    });
+    match r {
+        Ok(Err(e @ dirt_scene::SceneError::Internal { .. })) => {
+            panic!("animating {} hit a caught panic: {e}", path.display())
+        }
+        Ok(_) => {}
+        Err(_) => panic!("animating {} panicked", path.display()),
+    }
 }
 
 /// Packs JSON and a BIN chunk into a GLB container.
