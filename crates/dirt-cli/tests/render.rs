@@ -145,3 +145,86 @@ fn bad_input_is_an_error_not_a_panic() {
     }
     let _ = fs::remove_dir_all(&d);
 }
+
+const SKIN: &str = "/usr/share/assimp/models/glTF2/simple_skin/simple_skin.gltf";
+
+#[test]
+fn frames_are_rebuilt_written_and_previewed_and_a_lone_frame_is_the_same() {
+    assert!(
+        std::path::Path::new(SKIN).is_file(),
+        "{SKIN} is missing: install the Debian package assimp-testmodels"
+    );
+    let d = dir("frames");
+    let pattern = d.join("seq/frame_%03d.png");
+    let mut args = vec![
+        "render",
+        SKIN,
+        "--backend",
+        "cpu",
+        "--frames",
+        "0..3",
+        "--fps",
+        "2",
+        "-o",
+        pattern.to_str().expect("utf-8"),
+    ];
+    args.extend(SMALL);
+    let out = dirt(&args);
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    for n in 0..4 {
+        assert!(
+            err.contains(&format!("frame {n}: t {:.3} s, build ", n as f32 / 2.0)),
+            "{err}"
+        );
+        assert!(d.join(format!("seq/frame_{n:03}.png")).is_file());
+    }
+    let gif = fs::read(d.join("seq/frame_preview.gif")).expect("the preview");
+    assert!(gif.starts_with(b"GIF89a"));
+    // The skin bends: frames differ.
+    let f0 = fs::read(d.join("seq/frame_000.png")).expect("frame 0");
+    let f2 = fs::read(d.join("seq/frame_002.png")).expect("frame 2");
+    assert_ne!(f0, f2, "a moving scene gives different frames");
+
+    // One process, one frame: byte for byte frame 2 of the sequence.
+    let lone = d.join("lone/frame_%03d.png");
+    let mut args = vec![
+        "render",
+        SKIN,
+        "--backend",
+        "cpu",
+        "--frame",
+        "2",
+        "--fps",
+        "2",
+        "-o",
+        lone.to_str().expect("utf-8"),
+    ];
+    args.extend(SMALL);
+    let out = dirt(&args);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let entries: Vec<_> = fs::read_dir(d.join("lone")).expect("lone").collect();
+    assert_eq!(entries.len(), 1, "--frame writes exactly one file");
+    assert_eq!(fs::read(d.join("lone/frame_002.png")).expect("lone"), f2);
+
+    // Bad frame arguments are errors that say why.
+    let png = d.join("plain.png");
+    for (bad, why) in [
+        (vec!["--frames", "0..2"], "no frame number pattern"),
+        (vec!["--frames", "3..1"], "ends before it starts"),
+        (
+            vec!["--frame", "1", "--fps", "0"],
+            "--fps 0 must be a positive number",
+        ),
+        (vec!["--frame", "1", "--animation", "4"], "names none"),
+    ] {
+        let mut args = vec!["render", SKIN, "-o", png.to_str().expect("utf-8")];
+        args.extend(bad.iter().copied());
+        args.extend(SMALL);
+        let out = dirt(&args);
+        assert!(!out.status.success(), "{bad:?} succeeded");
+        let err = text(&out.stderr);
+        assert!(err.contains(why), "{bad:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}

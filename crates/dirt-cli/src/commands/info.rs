@@ -40,6 +40,22 @@ pub fn info(args: &InfoArgs) -> Result<()> {
             bounds.extent()
         );
     }
+    let ext = std::path::Path::new(&args.scene.scene)
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if matches!(ext.as_deref(), Some("gltf" | "glb")) {
+        // The animations `dirt render --frames --animation K` can play.
+        let animated = dirt_scene::open_animated(&args.scene.scene)
+            .with_context(|| format!("cannot read the animations of {}", args.scene.scene))?;
+        let clips = animated.clips();
+        println!("animations: {}", clips.len());
+        for (k, c) in clips.iter().enumerate() {
+            println!(
+                "  {k}: {:?}, {:.3} s, {} channels",
+                c.name, c.duration, c.channels
+            );
+        }
+    }
     let params = args.ads.params_for(&scene, args.rays_per_frame, None)?;
     let center = params.center.map_or_else(
         || format!("{} (bounds centre)", bounds.center()),

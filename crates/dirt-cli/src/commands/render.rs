@@ -2,7 +2,7 @@
 //! optionally linear EXR), every ray traced through the chosen tracer.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
@@ -21,12 +21,30 @@ use crate::gpu::{fallback_line, gpu_line};
 pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArg,
-    /// Where to write the image: tone-mapped 8-bit sRGB PNG.
+    /// Where to write the image: tone-mapped 8-bit sRGB PNG. With --frames or
+    /// --frame, a pattern such as out/frame_%04d.png (%d, %0Nd: the frame number).
     #[arg(short, long, value_name = "OUT.png")]
     out: PathBuf,
-    /// Also write the linear radiance as a 32-bit float OpenEXR file.
+    /// Also write the linear radiance as a 32-bit float OpenEXR file (a
+    /// pattern like --out's with --frames or --frame).
     #[arg(long, value_name = "OUT.exr")]
     exr: Option<PathBuf>,
+    /// Render the frames A to B of the scene's animation (both included):
+    /// DIRT is rebuilt for every frame of a moving scene, each frame's build
+    /// and trace time is printed, and an animated GIF preview is written beside
+    /// the frames (OUT's pattern with "preview" for the number, .gif).
+    #[arg(long, value_name = "A..B", value_parser = parse_frames, conflicts_with_all = ["frame", "reference"])]
+    frames: Option<(u32, u32)>,
+    /// Render frame N of the animation and nothing else: the same image as
+    /// frame N of --frames, so each machine of a farm can render one frame.
+    #[arg(long, value_name = "N", conflicts_with = "reference")]
+    frame: Option<u32>,
+    /// Frames per second: frame n shows the animation at n / F seconds.
+    #[arg(long, value_name = "F", default_value_t = 24.0)]
+    fps: f32,
+    /// Which of the file's animations plays (see `dirt info`).
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    animation: usize,
     /// Samples per pixel.
     #[arg(long, value_name = "N", default_value_t = Settings::default().spp)]
     spp: u32,
@@ -107,8 +125,101 @@ fn camera(args: &RenderArgs, scene: &dirt_scene::Scene) -> Result<Camera> {
     Ok(Camera::look_at(eye, target, fov)?)
 }
 
+/// `A..B` (both included) as a frame range.
+fn parse_frames(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("{s:?} is not a frame range A..B (e.g. 0..47)"))?;
+    let num = |x: &str| {
+        x.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("{x:?} in {s:?} is not a frame number"))
+    };
+    let (a, b) = (num(a)?, num(b.trim_start_matches('='))?);
+    if b < a {
+        return Err(format!("frame range {s:?} ends before it starts"));
+    }
+    Ok((a, b))
+}
+
+/// `template` with its `%d` or `%0Nd` replaced by `frame` (a number) or by
+/// `preview`; `None` when it has no such pattern.
+fn frame_path(template: &Path, frame: Option<u32>) -> Option<PathBuf> {
+    let t = template.to_str()?;
+    let start = t.find('%')?;
+    let rest = &t[start + 1..];
+    let digits = rest.find('d')?;
+    let spec = &rest[..digits];
+    if !spec.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let width: usize = spec.parse().unwrap_or(0);
+    let number = match frame {
+        Some(n) if spec.starts_with('0') => format!("{n:0width$}"),
+        Some(n) => format!("{n:width$}"),
+        None => "preview".to_string(),
+    };
+    Some(PathBuf::from(format!(
+        "{}{number}{}",
+        &t[..start],
+        &rest[digits + 1..]
+    )))
+}
+
+/// The frames to render: `None` for a plain image.
+fn frame_list(args: &RenderArgs) -> Result<Option<Vec<u32>>> {
+    let list: Vec<u32> = match (args.frames, args.frame) {
+        (Some((a, b)), _) => (a..=b).collect(),
+        (None, Some(n)) => vec![n],
+        (None, None) => return Ok(None),
+    };
+    if !(args.fps.is_finite() && args.fps > 0.0) {
+        bail!("--fps {} must be a positive number", args.fps);
+    }
+    if list.len() > 1 {
+        for (p, flag) in
+            std::iter::once((&args.out, "-o")).chain(args.exr.iter().map(|e| (e, "--exr")))
+        {
+            if frame_path(p, Some(0)).is_none() {
+                bail!(
+                    "{flag} {} has no frame number pattern: with --frames give one such as out/frame_%04d.png",
+                    p.display()
+                );
+            }
+        }
+    }
+    Ok(Some(list))
+}
+
 pub fn render(args: &RenderArgs) -> Result<()> {
-    let scene = args.scene.open()?;
+    let frames = frame_list(args)?;
+    let mut scene = match frames {
+        Some(_) => {
+            let spec = &args.scene.scene;
+            let mut a = dirt_scene::open_animated(spec)
+                .with_context(|| format!("cannot open scene {spec:?}"))?;
+            for w in &a.scene.warnings {
+                eprintln!("warning: {}: {w}", a.scene.name);
+            }
+            let clips = a.clips();
+            if !clips.is_empty() && !a.set_clip(args.animation) {
+                bail!(
+                    "scene {} has {} animations; --animation {} names none",
+                    a.scene.name,
+                    clips.len(),
+                    args.animation
+                );
+            }
+            if !a.is_animated() {
+                eprintln!(
+                    "scene {}: nothing in it moves; every frame is the same image, from one build",
+                    a.scene.name
+                );
+            }
+            a
+        }
+        None => dirt_scene::AnimatedScene::fixed(args.scene.open()?),
+    };
     let settings = Settings {
         width: args.width,
         height: args.height,
@@ -120,15 +231,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         ..Settings::default()
     };
     settings.validate()?;
-    let cam = camera(args, &scene)?;
-    let renderer = Renderer::new(&scene, cam, settings)
-        .with_context(|| format!("cannot render scene {}", scene.name))?;
-    if renderer.lights.is_empty() {
-        eprintln!(
-            "scene {}: no emitters and no punctual lights; lit by a white sky",
-            scene.name
-        );
-    }
+    // The framing of a scene without a camera of its own is chosen once, on
+    // the pose at time 0, so that every frame (and a lone --frame N) shares it.
+    let first_cam = camera(args, &scene.scene)?;
+    let follow_camera = !scene.scene.cameras.is_empty();
     let gpu = match args.backend {
         RenderBackend::Auto | RenderBackend::Gpu => match Gpu::open() {
             Ok(g) => {
@@ -152,13 +258,18 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         },
         _ => None,
     };
-    // A frame is the whole render.
+    let frame_time = |n: u32| n as f32 / args.fps;
+    if let Some(list) = &frames {
+        // The structure's setting is chosen on the first frame and kept.
+        scene.pose(frame_time(list[0]))?;
+    }
+    // The cost model chooses on the first frame; later frames keep its setting.
     let (params, mut chosen) = match args.backend {
         // These build no DIRT structure: nothing to choose.
         RenderBackend::Reference | RenderBackend::Brute => (args.ads.params(), None),
         // On the GPU the choice must fit the device's bindings.
         _ => args.ads.choose_within(
-            &scene,
+            &scene.scene,
             settings.max_rays(),
             None,
             gpu.as_ref().map(|g| g.binding_limits()),
@@ -166,32 +277,34 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     };
     let mut kept = None;
     let traversal = args.traversal;
-    let tris = &scene.triangles;
     let build = std::time::Instant::now();
-    let mut tracer: Box<dyn Tracer + '_> = match (args.backend, &gpu) {
-        (RenderBackend::Auto | RenderBackend::Gpu, Some(g)) => Box::new(
-            DirtGpu::built(g, tris, &params, traversal)
-                .with_context(|| format!("cannot build DIRT on the GPU ({params:?})"))?,
-        ),
-        (RenderBackend::Auto | RenderBackend::Gpu | RenderBackend::Cpu, _) => {
-            Box::new(match chosen.take() {
-                // The structure the cost model built while choosing.
-                Some(ads) => {
-                    kept = Some(ads.timings.total());
-                    DirtCpu::from_ads(ads, tris, traversal)
-                }
-                None => DirtCpu::built(tris, &params, traversal)
-                    .with_context(|| format!("cannot build DIRT ({params:?})"))?,
-            })
+    let mut tracer: Box<dyn Tracer + '_> = {
+        let tris = &scene.scene.triangles;
+        match (args.backend, &gpu) {
+            (RenderBackend::Auto | RenderBackend::Gpu, Some(g)) => Box::new(
+                DirtGpu::built(g, tris, &params, traversal)
+                    .with_context(|| format!("cannot build DIRT on the GPU ({params:?})"))?,
+            ),
+            (RenderBackend::Auto | RenderBackend::Gpu | RenderBackend::Cpu, _) => {
+                Box::new(match chosen.take() {
+                    // The structure the cost model built while choosing.
+                    Some(ads) => {
+                        kept = Some(ads.timings.total());
+                        DirtCpu::from_ads(ads, tris, traversal)
+                    }
+                    None => DirtCpu::built(tris, &params, traversal)
+                        .with_context(|| format!("cannot build DIRT ({params:?})"))?,
+                })
+            }
+            (RenderBackend::Reference, _) => Box::new(Reference::new(tris)),
+            (RenderBackend::Brute, _) => Box::new(Brute::new(tris)),
         }
-        (RenderBackend::Reference, _) => Box::new(Reference::new(tris)),
-        (RenderBackend::Brute, _) => Box::new(Brute::new(tris)),
     };
-    let build_time = build.elapsed();
+    let first_build = kept.unwrap_or_else(|| build.elapsed());
     eprintln!(
         "scene {}: {} triangles; {}x{}, {} spp, {} bounces, mode {:?}; tracer {} ({})",
-        scene.name,
-        tris.len(),
+        scene.scene.name,
+        scene.scene.len(),
         settings.width,
         settings.height,
         settings.spp,
@@ -203,10 +316,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
                 "built in {:.1} ms while the cost model chose, and kept",
                 t.as_secs_f64() * 1e3
             ),
-            None => format!("built in {:.1} ms", build_time.as_secs_f64() * 1e3),
+            None => format!("built in {:.1} ms", first_build.as_secs_f64() * 1e3),
         }
     );
-    let left_out: Vec<String> = dirt_render::features(&scene, &settings)
+    let left_out: Vec<String> = dirt_render::features(&scene.scene, &settings)
         .into_iter()
         .filter(|f| !f.used)
         .map(|f| format!("{} ({})", f.name, f.why))
@@ -215,6 +328,159 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         eprintln!("left out: {}", left_out.join("; "));
     }
 
+    let Some(list) = frames else {
+        let renderer = Renderer::new(&scene.scene, first_cam, settings)
+            .with_context(|| format!("cannot render scene {}", scene.scene.name))?;
+        return render_one(
+            args,
+            &renderer,
+            tracer.as_mut(),
+            &args.out,
+            args.exr.as_deref(),
+        );
+    };
+    let moving = scene.is_animated();
+    // A sequence's folder is made for it (a single image's folder must exist).
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+    }
+    let mut previews = Vec::new();
+    for (i, &n) in list.iter().enumerate() {
+        let t = frame_time(n);
+        let build_ms = if i == 0 {
+            first_build.as_secs_f64() * 1e3
+        } else if moving {
+            scene.pose(t)?;
+            let b = std::time::Instant::now();
+            tracer
+                .build(&scene.scene.triangles)
+                .with_context(|| format!("cannot rebuild DIRT for frame {n}"))?;
+            b.elapsed().as_secs_f64() * 1e3
+        } else {
+            0.0
+        };
+        let cam = if follow_camera {
+            camera(args, &scene.scene)?
+        } else {
+            first_cam
+        };
+        let renderer = Renderer::new(&scene.scene, cam, settings)
+            .with_context(|| format!("cannot render scene {}", scene.scene.name))?;
+        let out = frame_path(&args.out, Some(n)).unwrap_or_else(|| args.out.clone());
+        let exr = args
+            .exr
+            .as_ref()
+            .map(|e| frame_path(e, Some(n)).unwrap_or_else(|| e.clone()));
+        let rendered = render_quiet(
+            &renderer,
+            tracer.as_mut(),
+            &out,
+            exr.as_deref(),
+            args.exposure,
+        )?;
+        eprintln!(
+            "frame {n}: t {t:.3} s, build {build_ms:.1} ms{}, trace {:.1} ms ({} rays), render {:.2} s; wrote {}",
+            if i > 0 && !moving {
+                " (static: kept)"
+            } else {
+                ""
+            },
+            rendered.trace_time.as_secs_f64() * 1e3,
+            rendered.rays,
+            rendered.elapsed.as_secs_f64(),
+            out.display()
+        );
+        if list.len() > 1 {
+            previews.push(rendered.image.to_srgb8(args.exposure));
+        }
+    }
+    if list.len() > 1
+        && let Some(mut gif) = frame_path(&args.out, None)
+    {
+        gif.set_extension("gif");
+        write_gif(&gif, &previews, settings.width, settings.height, args.fps)?;
+        eprintln!(
+            "preview: wrote {} ({} frames)",
+            gif.display(),
+            previews.len()
+        );
+    }
+    Ok(())
+}
+
+/// Renders one frame without a progress bar, writes it, and returns it.
+fn render_quiet(
+    renderer: &Renderer,
+    tracer: &mut dyn Tracer,
+    out: &Path,
+    exr: Option<&Path>,
+    exposure: f32,
+) -> Result<dirt_render::Rendered> {
+    let rendered = renderer.render(tracer, &mut |_| {})?;
+    write_images(&rendered, out, exr, exposure)?;
+    Ok(rendered)
+}
+
+fn write_images(
+    rendered: &dirt_render::Rendered,
+    out: &Path,
+    exr: Option<&Path>,
+    exposure: f32,
+) -> Result<()> {
+    rendered
+        .image
+        .write_png(out, exposure)
+        .context("cannot write the PNG")?;
+    if let Some(exr) = exr {
+        rendered
+            .image
+            .write_exr(exr)
+            .context("cannot write the EXR")?;
+    }
+    if rendered
+        .image
+        .pixels
+        .iter()
+        .flatten()
+        .any(|c| !c.is_finite())
+    {
+        bail!("the image has non-finite pixels");
+    }
+    Ok(())
+}
+
+/// An animated GIF of tone-mapped RGB frames, looping.
+fn write_gif(path: &Path, frames: &[Vec<u8>], width: u32, height: u32, fps: f32) -> Result<()> {
+    use image::codecs::gif::{GifEncoder, Repeat};
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut enc = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+    enc.set_repeat(Repeat::Infinite)
+        .context("cannot write the GIF")?;
+    let delay = image::Delay::from_numer_denom_ms(1000, (fps.round() as u32).max(1));
+    for rgb in frames {
+        let rgba: Vec<u8> = rgb
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        let img = image::RgbaImage::from_raw(width, height, rgba)
+            .context("a frame's size does not match the image")?;
+        enc.encode_frame(image::Frame::from_parts(img, 0, 0, delay))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// A single image with a progress bar and the summary line.
+fn render_one(
+    args: &RenderArgs,
+    renderer: &Renderer,
+    tracer: &mut dyn Tracer,
+    out: &Path,
+    exr: Option<&Path>,
+) -> Result<()> {
+    let settings = renderer.settings;
     let target = if std::io::stderr().is_terminal() {
         ProgressDrawTarget::stderr()
     } else {
@@ -227,7 +493,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         )
         .context("progress template")?,
     );
-    let rendered = renderer.render(tracer.as_mut(), &mut |p| {
+    let rendered = renderer.render(tracer, &mut |p| {
         let secs = p.elapsed.as_secs_f64();
         let mrays = if secs > 0.0 {
             p.rays as f64 / secs / 1e6
@@ -241,27 +507,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         ));
     })?;
     bar.finish_and_clear();
-
-    rendered
-        .image
-        .write_png(&args.out, args.exposure)
-        .context("cannot write the PNG")?;
-    let mut wrote = args.out.display().to_string();
-    if let Some(exr) = &args.exr {
-        rendered
-            .image
-            .write_exr(exr)
-            .context("cannot write the EXR")?;
+    write_images(&rendered, out, exr, args.exposure)?;
+    let mut wrote = out.display().to_string();
+    if let Some(exr) = exr {
         wrote = format!("{wrote}, {}", exr.display());
-    }
-    if rendered
-        .image
-        .pixels
-        .iter()
-        .flatten()
-        .any(|c| !c.is_finite())
-    {
-        bail!("the image has non-finite pixels");
     }
     let secs = rendered.elapsed.as_secs_f64();
     let trace_secs = rendered.trace_time.as_secs_f64();
@@ -284,4 +533,27 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         eprintln!("rmse against {}: {e:.6}", path.display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_patterns_expand() {
+        let p = |s: &str, n| frame_path(Path::new(s), n).map(|p| p.display().to_string());
+        assert_eq!(
+            p("out/frame_%04d.png", Some(7)).as_deref(),
+            Some("out/frame_0007.png")
+        );
+        assert_eq!(p("f%d.png", Some(12)).as_deref(), Some("f12.png"));
+        assert_eq!(p("f%d.png", None).as_deref(), Some("fpreview.png"));
+        assert_eq!(p("plain.png", Some(1)), None);
+        assert_eq!(p("odd%x.png", Some(1)), None);
+        assert_eq!(parse_frames("2..5"), Ok((2, 5)));
+        assert_eq!(parse_frames("3..=3"), Ok((3, 3)));
+        assert!(parse_frames("5..2").is_err());
+        assert!(parse_frames("a..b").is_err());
+        assert!(parse_frames("7").is_err());
+    }
 }
