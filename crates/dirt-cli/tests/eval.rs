@@ -132,6 +132,25 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
             .iter()
             .any(|r| &r[db] == "dirt-cpu" && &r[dd] == "0")
     );
+    // The animated assets beside the grid, DIRT exact on every frame of each.
+    let ds = column(&dynamic, "scene");
+    for scene in ["wave", "twister", "simple_skin", "AnimatedMorphCube"] {
+        let of: Vec<_> = dynamic[1..].iter().filter(|r| &r[ds] == scene).collect();
+        assert!(
+            of.iter().any(|r| &r[db] == "dirt-cpu"),
+            "no dirt-cpu row of {scene}"
+        );
+        assert!(
+            of.iter().any(|r| &r[db] == "obvhs"),
+            "no obvhs row of {scene}"
+        );
+        assert!(
+            of.iter()
+                .filter(|r| r[db].starts_with("dirt"))
+                .all(|r| &r[dd] == "0"),
+            "DIRT differs from brute force on {scene}"
+        );
+    }
     // DIRT and the renderer's BVH reference are both exact: the same images.
     let renders = csv_rows(&dir.join("renders.csv"));
     let same = column(&renders, "same_bits_as_reference_tracer");

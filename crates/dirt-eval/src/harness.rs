@@ -129,6 +129,7 @@ impl EvalConfig {
             peers: crate::peers::available(),
             dynamic: Some(DynamicConfig {
                 grid: 32,
+                animated: true,
                 frames: 3,
                 rays: 4000,
                 rays_large: None,
@@ -183,6 +184,7 @@ impl EvalConfig {
             peers: crate::peers::available(),
             dynamic: Some(DynamicConfig {
                 grid: 128,
+                animated: true,
                 frames: 8,
                 rays: 5_000,
                 rays_large: Some(100_000),

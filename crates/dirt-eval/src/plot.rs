@@ -323,10 +323,14 @@ fn sweep(res: &EvalResults, knob: &str, path: &Path) -> Result<bool, EvalError> 
 fn dynamic(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
     let root = SVGBackend::new(path, (720, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
-    // The first ray count's frames (every count is in the report's tables).
+    // The grid's first ray count's frames (every scene and count is in the
+    // report's tables).
     let first = res.dynamic.first().map_or(0, |r| r.rays);
-    let rows: Vec<&crate::dynamic::DynamicRow> =
-        res.dynamic.iter().filter(|r| r.rays == first).collect();
+    let rows: Vec<&crate::dynamic::DynamicRow> = res
+        .dynamic
+        .iter()
+        .filter(|r| r.rays == first && r.scene == crate::dynamic::WAVE)
+        .collect();
     let mut backends: Vec<&str> = rows.iter().map(|r| r.backend.as_str()).collect();
     backends.sort_unstable();
     backends.dedup();

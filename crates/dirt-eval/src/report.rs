@@ -314,20 +314,35 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     }
     let _ = writeln!(s);
     fixed_default_table(&mut s, res, &peers);
-    let mut ray_counts: Vec<usize> = res.dynamic.iter().map(|r| r.rays).collect();
-    ray_counts.dedup();
-    for rays in ray_counts {
+    let mut runs: Vec<(&str, usize)> = res
+        .dynamic
+        .iter()
+        .map(|r| (r.scene.as_str(), r.rays))
+        .collect();
+    runs.dedup();
+    for (scene, rays) in runs {
         let rows: Vec<crate::dynamic::DynamicRow> = res
             .dynamic
             .iter()
-            .filter(|r| r.rays == rays)
+            .filter(|r| r.rays == rays && r.scene == scene)
             .cloned()
             .collect();
         let tris = rows.first().map_or(0, |r| r.triangles);
         let frames = rows.iter().map(|r| r.frame).max().map_or(0, |f| f + 1);
+        let what = match scene {
+            crate::dynamic::WAVE => {
+                format!("a deforming grid of {tris} triangles, every vertex moves every frame")
+            }
+            "twister" => format!(
+                "`twister`, a generated skinned glTF tube of {tris} triangles posed by `dirt-scene` (two joints, its clip spread over the frames)"
+            ),
+            other => format!(
+                "`{other}`, an animated glTF asset of {tris} triangles posed by `dirt-scene` (its clip spread over the frames)"
+            ),
+        };
         let _ = writeln!(
             s,
-            "Fully dynamic scene (a deforming grid of {tris} triangles, every vertex moves every frame; {frames} frames of rebuild + trace of {rays} camera rays; medians per frame; `dirt-cpu` is the library's default, `DirtCpu::auto`, whose choice is made in frame 0's build):\n"
+            "Fully dynamic scene ({what}; {frames} frames of rebuild + trace of {rays} camera rays; medians per frame; `dirt-cpu` is the library's default, `DirtCpu::auto`, whose choice is made in frame 0's build):\n"
         );
         let _ = writeln!(
             s,

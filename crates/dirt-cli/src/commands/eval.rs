@@ -125,6 +125,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
         }
         let d = cfg.dynamic.get_or_insert(DynamicConfig {
             grid: 64,
+            animated: true,
             frames: f,
             rays: cfg.rays,
             rays_large: None,
