@@ -91,6 +91,17 @@ fn the_layers_only_depend_downwards() {
                 "dirt-gpu",
             ],
         ),
+        (
+            "dirt-view",
+            &[
+                "dirt-math",
+                "dirt-core",
+                "dirt-scene",
+                "dirt-cpu",
+                "dirt-gpu",
+                "dirt-render",
+            ],
+        ),
     ];
     for (name, ok) in allowed {
         let extra: Vec<String> = dirt_deps(name).difference(&set(ok)).cloned().collect();
@@ -132,6 +143,28 @@ fn the_gpu_crate_needs_no_cpu_crate() {
     }
 }
 
+/// The window is the viewer's alone: no other crate pulls in winit.
+#[test]
+fn only_the_viewer_knows_winit() {
+    for name in [
+        "dirt-math",
+        "dirt-core",
+        "dirt-scene",
+        "dirt-cpu",
+        "dirt-gpu",
+        "dirt-shaders",
+        "dirt-render",
+        "dirt-eval",
+        "dirt-cli",
+    ] {
+        assert!(
+            !dependencies(name).contains("winit"),
+            "{name} depends on winit"
+        );
+    }
+    assert!(dependencies("dirt-view").contains("winit"));
+}
+
 #[test]
 fn each_library_crate_has_one_error_enum() {
     for name in [
@@ -143,6 +176,7 @@ fn each_library_crate_has_one_error_enum() {
         "dirt-shaders",
         "dirt-render",
         "dirt-eval",
+        "dirt-view",
         "dirt-cli",
     ] {
         let derives: usize = sources(name)

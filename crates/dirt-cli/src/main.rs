@@ -6,6 +6,7 @@
 //! dirt bench     SCENE [ADS options] [--rays N] [--seed S] [--kind K] [--backends cpu,gpu,brute] [--repeat K] [--json FILE]
 //! dirt triangles SCENE --out TRIS.npy
 //! dirt info      SCENE [ADS options]
+//! dirt view      [SCENE] [--width W --height H --scale F] [--backend auto|gpu|cpu] [--frames N] [--max-samples N]
 //! ADS options:   [--views cube|single] [--resolution N] [--buckets B] [--tile S] [--center X,Y,Z]
 //! ```
 //!
@@ -20,7 +21,7 @@ use std::process::ExitCode;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
-use crate::commands::{bench, eval, info, rays, render, trace, triangles};
+use crate::commands::{bench, eval, info, rays, render, trace, triangles, view};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -62,6 +63,10 @@ enum Command {
     /// Render an image: a path tracer whose every ray is traced through DIRT
     /// (or the reference BVH, or brute force); tone-mapped PNG, linear EXR.
     Render(render::RenderArgs),
+    /// Open a window that path-traces the scene progressively through DIRT
+    /// (GPU, or CPU with the image uploaded): orbit, pan, zoom, play/pause;
+    /// samples and rays/s in the title bar.
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -74,6 +79,7 @@ fn main() -> ExitCode {
         match &mut cli.command {
             Command::Trace(a) => a.ads.note_given(sub),
             Command::Info(a) => a.ads.note_given(sub),
+            Command::View(a) => a.ads.note_given(sub),
             _ => {}
         }
     }
@@ -85,6 +91,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::bench(&args),
         Command::Eval(args) => eval::eval(&args),
         Command::Render(args) => render::render(&args),
+        Command::View(args) => view::view(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -159,6 +166,53 @@ mod tests {
         assert_eq!(p.views, ViewsKind::Single);
         assert_eq!((p.resolution, p.buckets, p.tile), (64, 4, 2));
         assert_eq!(p.center, Some(Vec3::new(-1.0, 0.5, 2.0)));
+    }
+
+    #[test]
+    fn view_options_parse() {
+        let parse = |args: &[&str]| {
+            let m = Cli::command().get_matches_from(args);
+            let mut cli = Cli::from_arg_matches(&m).expect("parse");
+            let Command::View(a) = &mut cli.command else {
+                panic!("not view")
+            };
+            if let Some((_, sub)) = m.subcommand() {
+                a.ads.note_given(sub);
+            }
+            a.options()
+        };
+        let o = parse(&["dirt", "view"]);
+        assert_eq!(o.scene, dirt_scene::DEFAULT_SCENE);
+        assert_eq!((o.width, o.height, o.scale), (640, 480, 2.0));
+        assert!(o.play && o.frames.is_none());
+        assert_eq!(o.ads, dirt_view::Ads::Auto(AdsParams::default()));
+        let o = parse(&[
+            "dirt",
+            "view",
+            "layers",
+            "--frames",
+            "5",
+            "--scale",
+            "1",
+            "--backend",
+            "cpu",
+            "--resolution",
+            "64",
+            "--paused",
+            "--eye",
+            "0,1,2",
+            "--max-samples",
+            "8",
+        ]);
+        assert_eq!(o.scene, "layers");
+        assert_eq!((o.frames, o.max_samples, o.scale), (Some(5), Some(8), 1.0));
+        assert_eq!(o.backend, dirt_view::Backend::Cpu);
+        assert!(!o.play);
+        assert_eq!(o.eye, Some(Vec3::new(0.0, 1.0, 2.0)));
+        let dirt_view::Ads::Fixed(p) = o.ads else {
+            panic!("a given resolution fixes the parameters")
+        };
+        assert_eq!(p.resolution, 64);
     }
 
     #[test]

@@ -41,6 +41,20 @@ pub struct Rendered {
     pub tracer: String,
 }
 
+/// One sample of every pixel ([`Renderer::render_sample`]): what
+/// [`Renderer::render`] adds up per sample, for callers that accumulate
+/// themselves (a progressive viewer).
+#[derive(Clone, Debug)]
+pub struct SamplePass {
+    /// Linear radiance per pixel, rows top to bottom.
+    pub radiance: Vec<Vec3>,
+    /// Rays traced for this sample (primary, continuation and shadow rays).
+    pub rays: u64,
+    pub visibility: VisibilityStats,
+    /// Time spent inside the tracer.
+    pub trace_time: Duration,
+}
+
 /// Everything fixed for a render of one scene from one camera.
 #[derive(Debug)]
 pub struct Renderer<'s> {
@@ -166,6 +180,29 @@ impl<'s> Renderer<'s> {
             trace_time: counters.trace_time,
             elapsed: start.elapsed(),
             tracer: tracer.name(),
+        })
+    }
+
+    /// Sample number `sample` of every pixel alone, with the random numbers
+    /// [`Renderer::render`] uses for it: the passes `0..n` added up in order
+    /// and scaled by `1 / n` (as `f32`) give the image of an `n`-spp render,
+    /// bit for bit. [`Settings::spp`] is not read.
+    pub fn render_sample(
+        &self,
+        tracer: &mut dyn Tracer,
+        sample: u32,
+    ) -> Result<SamplePass, RenderError> {
+        let mut counters = Counters {
+            rays: 0,
+            trace_time: Duration::ZERO,
+            visibility: VisibilityStats::default(),
+        };
+        let radiance = self.sample(tracer, sample, &mut counters)?;
+        Ok(SamplePass {
+            radiance,
+            rays: counters.rays,
+            visibility: counters.visibility,
+            trace_time: counters.trace_time,
         })
     }
 

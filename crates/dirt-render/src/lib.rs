@@ -50,7 +50,7 @@ pub mod trace;
 
 pub use camera::Camera;
 pub use features::{Feature, features};
-pub use integrator::{Progress, Rendered, Renderer};
+pub use integrator::{Progress, Rendered, Renderer, SamplePass};
 pub use output::Image;
 pub use trace::Tracer;
 

@@ -441,3 +441,32 @@ fn rays_are_valid_and_shadow_rays_respect_tmax() {
     let mut b = Brute::new(&[tri]);
     assert!(!b.trace(&[r]).expect("trace")[0].is_hit());
 }
+
+/// A progressive viewer adds one sample pass at a time: passes `0..n` added
+/// in order and scaled by `1 / n` are the `n`-spp render, bit for bit, and
+/// count the same rays.
+#[test]
+fn sample_passes_add_up_to_the_render() {
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    for mode in [Mode::Pt, Mode::Ao] {
+        let s = settings(24, 16, 3, 3, mode);
+        let camera = Camera::for_scene(&scene, 1.5).expect("camera");
+        let r = Renderer::new(&scene, camera, s).expect("renderer");
+        let mut t = DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
+            .expect("dirt build");
+        let whole = r.render(&mut t, &mut |_| {}).expect("render");
+        let mut sum = vec![Vec3::ZERO; 24 * 16];
+        let mut rays = 0;
+        for sample in 0..s.spp {
+            let pass = r.render_sample(&mut t, sample).expect("pass");
+            rays += pass.rays;
+            for (acc, v) in sum.iter_mut().zip(&pass.radiance) {
+                *acc += *v;
+            }
+        }
+        let inv = 1.0 / s.spp as f32;
+        let mean: Vec<[f32; 3]> = sum.iter().map(|v| (*v * inv).to_array()).collect();
+        assert_eq!(mean, whole.image.pixels, "{mode:?}");
+        assert_eq!(rays, whole.rays, "{mode:?}");
+    }
+}

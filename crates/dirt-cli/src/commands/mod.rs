@@ -8,6 +8,7 @@ pub mod rays;
 pub mod render;
 pub mod trace;
 pub mod triangles;
+pub mod view;
 
 /// Milliseconds of a duration, for the timing lines commands print.
 pub fn millis(d: std::time::Duration) -> f64 {
