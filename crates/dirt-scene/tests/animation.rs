@@ -511,3 +511,86 @@ fn bad_animation_data_is_refused_by_name() {
         Err(SceneError::Animation { .. })
     ));
 }
+
+#[test]
+fn every_channel_under_step_and_cubic_spline() {
+    let h = FRAC_1_SQRT_2;
+    // Scale, STEP: the first key's value holds until the second key.
+    let (_d, p) = one_channel(
+        "scale",
+        "STEP",
+        &[0.0, 1.0],
+        &[1., 1., 1., 3., 3., 3.],
+        "VEC3",
+        false,
+    );
+    let mut s = load_animated(&p).unwrap();
+    s.pose(0.5).unwrap();
+    assert_near(&corners(&s), &moved(|v| v), 0.0, "scale STEP t=0.5");
+    s.pose(1.0).unwrap();
+    assert_near(&corners(&s), &moved(|v| 3.0 * v), 0.0, "scale STEP t=1");
+
+    // Rotation, STEP: no turn until the key of 90°.
+    let (_d, p) = one_channel(
+        "rotation",
+        "STEP",
+        &[0.0, 1.0],
+        &[0., 0., 0., 1., 0., 0., h, h],
+        "VEC4",
+        false,
+    );
+    let mut s = load_animated(&p).unwrap();
+    s.pose(0.5).unwrap();
+    assert_near(&corners(&s), &moved(|v| v), 0.0, "rotation STEP t=0.5");
+    s.pose(1.0).unwrap();
+    let quarter = [Vec3::ZERO, Vec3::Y, -Vec3::X];
+    assert_near(&corners(&s), &quarter, 1e-6, "rotation STEP t=1");
+
+    // Rotation, CUBICSPLINE with zero tangents: halfway, the spline is the
+    // mean of the two keys, (0, 0, h/2, 1/2 + h/2), normalised: a turn of 45°.
+    let (_d, p) = one_channel(
+        "rotation",
+        "CUBICSPLINE",
+        &[0.0, 1.0],
+        &[
+            0., 0., 0., 0., /* v0 */ 0., 0., 0., 1., /* b0 */ 0., 0., 0., 0., //
+            /* a1 */ 0., 0., 0., 0., /* v1 */ 0., 0., h, h, /* b1 */ 0., 0., 0., 0.,
+        ],
+        "VEC4",
+        false,
+    );
+    let mut s = load_animated(&p).unwrap();
+    s.pose(0.5).unwrap();
+    let (c, n) = (45f32.to_radians().cos(), 45f32.to_radians().sin());
+    let want = [Vec3::ZERO, Vec3::new(c, n, 0.), Vec3::new(-n, c, 0.)];
+    assert_near(&corners(&s), &want, 1e-6, "rotation CUBICSPLINE t=0.5");
+
+    // Morph weights, STEP and CUBICSPLINE (zero tangents: 0.5 at halfway).
+    let (_d, p) = one_channel("weights", "STEP", &[0.0, 1.0], &[0.0, 1.0], "SCALAR", true);
+    let mut s = load_animated(&p).unwrap();
+    s.pose(0.5).unwrap();
+    assert_near(&corners(&s), &moved(|v| v), 0.0, "weights STEP t=0.5");
+    s.pose(1.0).unwrap();
+    assert_near(
+        &corners(&s),
+        &moved(|v| v + Vec3::Z),
+        0.0,
+        "weights STEP t=1",
+    );
+    let (_d, p) = one_channel(
+        "weights",
+        "CUBICSPLINE",
+        &[0.0, 1.0],
+        &[0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        "SCALAR",
+        true,
+    );
+    let mut s = load_animated(&p).unwrap();
+    s.pose(0.5).unwrap();
+    assert_near(
+        &corners(&s),
+        &moved(|v| v + Vec3::new(0., 0., 0.5)),
+        1e-7,
+        "weights CUBICSPLINE t=0.5",
+    );
+}
