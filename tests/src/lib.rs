@@ -258,6 +258,30 @@ pub fn mismatches(
     out
 }
 
+/// Where the compact uniform grid (`dirt_cpu::grid`, the exact baseline) at
+/// densities 1, 4 and 16 differs from `truth` in any bit.
+pub fn grid_mismatches(tris: &[Triangle], rays: &[Ray], truth: &[Hit]) -> Vec<String> {
+    let mut out = Vec::new();
+    for density in [1.0, dirt_cpu::grid::DEFAULT_DENSITY, 16.0] {
+        let g = match dirt_cpu::grid::Grid::built(tris, density) {
+            Ok(g) => g,
+            Err(e) => {
+                out.push(format!("grid ρ{density}: build failed: {e}"));
+                continue;
+            }
+        };
+        for (i, (r, t)) in rays.iter().zip(truth).enumerate() {
+            let h = g.trace_ray(r);
+            if h.bits() != t.bits() {
+                out.push(format!(
+                    "grid ρ{density} ray {i} {r:?}: grid {h:?} brute {t:?}"
+                ));
+            }
+        }
+    }
+    out
+}
+
 /// Asserts exactness over the whole parameter matrix.
 pub fn assert_exact_over_matrix(name: &str, tris: &[Triangle], rays: &[Ray], resolution: u32) {
     let truth = brute_force::trace(tris, rays);
@@ -271,6 +295,7 @@ pub fn assert_exact_over_matrix(name: &str, tris: &[Triangle], rays: &[Ray], res
     for p in param_matrix(resolution) {
         all.extend(mismatches(tris, rays, &truth, &p));
     }
+    all.extend(grid_mismatches(tris, rays, &truth));
     assert!(
         all.is_empty(),
         "{name}: {} mismatches, first: {}",
@@ -348,6 +373,7 @@ pub fn assert_exact(name: &str, tris: &[Triangle], rays: &[Ray], params: &[AdsPa
     for p in params {
         all.extend(mismatches(tris, rays, &truth, p));
     }
+    all.extend(grid_mismatches(tris, rays, &truth));
     assert!(
         all.is_empty(),
         "{name}: {} mismatches, first: {}",

@@ -204,6 +204,41 @@ fn cpu_hits_equal_brute_force_hits_byte_for_byte() {
         .expect("data");
     let hits = words.chunks_exact(4).filter(|h| h[0] != u32::MAX).count();
     assert!(hits > 1000 && hits < 20000, "{hits} hits");
+
+    // The uniform grid shares the triangle test: the same bytes, at any density.
+    for density in ["0.5", "4"] {
+        let grid = dir.path(&format!("grid{density}.npy"));
+        let (_, log) = dirt_ok(&[
+            "trace",
+            SCENE,
+            "--rays",
+            s(&rays),
+            "--out",
+            s(&grid),
+            "--backend",
+            "grid",
+            "--density",
+            density,
+        ]);
+        assert!(log.contains("build:") && log.contains("grid"), "{log}");
+        assert!(
+            fs::read(&grid).expect("grid hits") == b,
+            "grid ρ{density} differs from brute force"
+        );
+    }
+    let e = dirt_err(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&brute),
+        "--backend",
+        "grid",
+        "--density",
+        "0",
+    ]);
+    assert!(e.contains("density"), "{e}");
 }
 
 #[test]

@@ -123,6 +123,19 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         .map(|r| r.get(backend).unwrap_or(""))
         .collect();
     assert!(peers.contains(&"obvhs"));
+    // The uniform grid shares DIRT's triangle test: held to every bit.
+    let grid_rows: Vec<_> = traces[1..]
+        .iter()
+        .filter(|r| &r[backend] == "grid ρ4")
+        .collect();
+    assert_eq!(
+        grid_rows.len(),
+        2 * 5,
+        "the grid on both scenes, every ray type"
+    );
+    for r in &grid_rows {
+        assert_eq!(&r[differ], "0", "the grid differs from brute force: {r:?}");
+    }
     assert_eq!(peers.contains(&"embree"), cfg!(feature = "embree"));
 
     let dynamic = csv_rows(&dir.join("dynamic.csv"));
@@ -136,6 +149,10 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
     let ds = column(&dynamic, "scene");
     for scene in ["wave", "twister", "simple_skin", "AnimatedMorphCube"] {
         let of: Vec<_> = dynamic[1..].iter().filter(|r| &r[ds] == scene).collect();
+        assert!(
+            of.iter().any(|r| &r[db] == "grid ρ4" && &r[dd] == "0"),
+            "no exact grid row of {scene}"
+        );
         assert!(
             of.iter().any(|r| &r[db] == "dirt-cpu"),
             "no dirt-cpu row of {scene}"

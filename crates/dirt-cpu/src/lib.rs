@@ -16,6 +16,7 @@ pub mod cache;
 pub mod cost;
 pub mod fill_depth;
 pub mod fill_primitives;
+pub mod grid;
 pub mod mip_depth;
 pub mod trace;
 mod trace_fast;

@@ -230,7 +230,7 @@ fn run_with(
             Ok(tracer) => entries.push(Entry {
                 backend: peer.name.into(),
                 tracer,
-                how: Match::PEER,
+                how: peer.how(),
                 peer: true,
                 skipped: false,
             }),

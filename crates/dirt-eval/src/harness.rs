@@ -735,7 +735,7 @@ fn measure_peer(
         repeat: cfg.repeat,
         stats: StatsPass::Prefix(prep.compared()),
         per_ray: None,
-        how: Match::PEER,
+        how: peer.how(),
     };
     trace_types(prep, tracer.as_mut(), &subject, plan, res)
 }

@@ -1,5 +1,7 @@
 //! Peers measured in the same run on the same triangles and rays: `obvhs`
-//! (a compressed wide BVH, CWBVH) and, with the `embree` feature, Embree 3.
+//! (a compressed wide BVH, CWBVH), with the `embree` feature Embree 3, and
+//! the compact uniform grid of seed 002 (`dirt_cpu::grid`, an exact baseline
+//! that shares DIRT's triangle test, so its hits are held to every bit).
 //! Each is a [`Tracer`], measured by [`crate::measure`] like DIRT.
 //!
 //! **Adding a tracer to the evaluation**: implement [`Tracer`] for it and add
@@ -30,7 +32,24 @@ pub struct Peer {
     /// A tracer, not yet built, given the harness's thread count. An error
     /// (a library that cannot start) is noted and the peer skipped.
     pub make: fn(threads: usize) -> Result<Box<dyn Tracer>, CoreError>,
+    /// Whether it uses DIRT's triangle test: its hits are then compared bit
+    /// for bit ([`crate::Match::Bits`]), else within [`crate::Match::PEER`].
+    pub exact: bool,
 }
+
+impl Peer {
+    /// How its hits are compared with brute force's.
+    pub fn how(&self) -> crate::Match {
+        if self.exact {
+            crate::Match::Bits
+        } else {
+            crate::Match::PEER
+        }
+    }
+}
+
+/// The grid's name in the rows: its density is the paper's.
+pub const GRID: &str = "grid ρ4";
 
 /// The peers this build has, one line each (Embree only with the `embree` feature).
 pub fn available() -> Vec<Peer> {
@@ -38,11 +57,22 @@ pub fn available() -> Vec<Peer> {
         Peer {
             name: "obvhs",
             make: |_| Ok(Box::new(Obvhs::default())),
+            exact: false,
         },
         #[cfg(feature = "embree")]
         Peer {
             name: "embree",
             make: |threads| Ok(Box::new(embree::Embree::new(threads)?)),
+            exact: false,
+        },
+        Peer {
+            name: GRID,
+            make: |_| {
+                Ok(Box::new(dirt_cpu::grid::Grid::new(
+                    dirt_cpu::grid::DEFAULT_DENSITY,
+                )?))
+            },
+            exact: true,
         },
     ]
 }
@@ -302,7 +332,7 @@ mod tests {
             t.build(&tris).expect("peer builds");
             let hits = t.trace(&rays).expect("peer traces");
             assert_eq!(
-                crate::compare(&hits, &truth, crate::Match::PEER).differ,
+                crate::compare(&hits, &truth, peer.how()).differ,
                 0,
                 "{}: {hits:?}",
                 peer.name

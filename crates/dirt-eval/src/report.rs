@@ -239,7 +239,8 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "- Peers: obvhs 0.4 (CWBVH, `fast_build` preset, its Möller–Trumbore test) and Embree 3 (default build quality, `rtcIntersect1` per ray) on the same triangles and rays.\n"
+        "- Peers: obvhs 0.4 (CWBVH, `fast_build` preset, its Möller–Trumbore test) and Embree 3 (default build quality, `rtcIntersect1` per ray) on the same triangles and rays; and `{}`, the compact uniform grid of Lagae and Dutré (seed 002: ρ = 4 cells per triangle, two-pass build, 3D DDA) with DIRT's triangle test, an exact baseline held to every bit like DIRT.\n",
+        crate::peers::GRID
     );
 
     // Headline ratios.
@@ -253,7 +254,9 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         let mut p: Vec<String> = res
             .builds
             .iter()
-            .filter(|b| b.backend == "obvhs" || b.backend == "embree")
+            .filter(|b| {
+                b.backend == "obvhs" || b.backend == "embree" || b.backend == crate::peers::GRID
+            })
             .map(|b| b.backend.clone())
             .collect();
         p.sort();
@@ -436,6 +439,25 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
             );
         }
         let _ = writeln!(s);
+    }
+    let (grid_differ, grid_compared) = res
+        .traces
+        .iter()
+        .filter(|t| t.backend == crate::peers::GRID)
+        .map(|t| (t.differ, t.compared))
+        .chain(
+            res.dynamic
+                .iter()
+                .filter(|r| r.backend == crate::peers::GRID)
+                .map(|r| (r.differ, r.compared)),
+        )
+        .fold((0, 0), |(d, c), (x, y)| (d + x, c + y));
+    if grid_compared > 0 {
+        let _ = writeln!(
+            s,
+            "{}: {grid_differ} of {grid_compared} compared rays differ from brute force in any bit (every scene, ray type and frame; it shares DIRT's triangle test, so anything but 0 is a defect).\n",
+            crate::peers::GRID
+        );
     }
     let _ = writeln!(
         s,

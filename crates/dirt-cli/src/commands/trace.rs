@@ -36,6 +36,9 @@ pub struct TraceArgs {
     /// How the cpu and gpu backends walk the tiles a ray crosses.
     #[arg(long, value_enum, default_value_t = Traversal::default())]
     pub traversal: Traversal,
+    /// Cells per triangle of the grid backend.
+    #[arg(long, value_name = "RHO", default_value_t = dirt_cpu::grid::DEFAULT_DENSITY)]
+    pub density: f32,
 }
 
 /// The tracer behind `dirt trace` and `dirt bench`.
@@ -68,6 +71,9 @@ pub enum TraceBackend {
     /// Embree 3 (a peer of the evaluation; its own triangle test; only in a `dirt`
     /// built with the `embree` feature, as scripts/eval builds it).
     Embree,
+    /// The compact uniform grid (Lagae and Dutré; `--density` cells per
+    /// triangle), with DIRT's triangle test: the same hits as brute force.
+    Grid,
 }
 
 impl fmt::Display for TraceBackend {
@@ -78,6 +84,7 @@ impl fmt::Display for TraceBackend {
             TraceBackend::Brute => "brute",
             TraceBackend::Obvhs => "obvhs",
             TraceBackend::Embree => "embree",
+            TraceBackend::Grid => "grid",
         })
     }
 }
@@ -121,6 +128,9 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
                     .with_context(|| format!("cannot start {name}"))?,
             )
         }
+        TraceBackend::Grid => Some(Box::new(
+            dirt_cpu::grid::Grid::new(args.density).context("--density")?,
+        ) as Box<dyn Tracer>),
         _ => None,
     };
     let gpu = match args.backend {
@@ -138,7 +148,9 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     };
     // Brute force builds nothing, so it has no parameters (and no cost model).
     let (params, chosen) = match args.backend {
-        TraceBackend::Brute | TraceBackend::Obvhs | TraceBackend::Embree => (None, None),
+        TraceBackend::Brute | TraceBackend::Obvhs | TraceBackend::Embree | TraceBackend::Grid => {
+            (None, None)
+        }
         _ => {
             // On the GPU the choice must fit the device's bindings.
             let limits = gpu.as_ref().map(|g| g.binding_limits());
