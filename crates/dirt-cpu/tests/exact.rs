@@ -4,23 +4,9 @@ use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_cpu::{Ads, brute_force, trace_with_stats};
 use dirt_math::{Ray, Triangle, Vec3};
 
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn v(&mut self, s: f32) -> Vec3 {
-        Vec3::new(
-            self.f() * 2.0 - 1.0,
-            self.f() * 2.0 - 1.0,
-            self.f() * 2.0 - 1.0,
-        ) * s
-    }
-}
+mod common;
+
+use common::Rng;
 
 fn soup(n: usize, rng: &mut Rng) -> Vec<Triangle> {
     (0..n)
