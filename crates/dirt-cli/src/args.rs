@@ -31,6 +31,20 @@ impl SceneArg {
     }
 }
 
+/// The camera of `render` and `view`: the scene's, with these overrides.
+#[derive(Debug, Args)]
+pub struct CameraArgs {
+    /// Camera position "X,Y,Z" [default: the scene's first camera, else a framing of the bounds].
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
+    pub eye: Option<Vec3>,
+    /// Point the camera looks at (and `view` orbits), "X,Y,Z".
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
+    pub target: Option<Vec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+}
+
 /// Which build parameters the user gave (the rest are defaults or the model's).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Given {

@@ -9,7 +9,6 @@ use clap::{Args, ValueEnum};
 use dirt_core::{Tracer, Traversal};
 use dirt_cpu::{DirtCpu, brute_force::Brute};
 use dirt_gpu::{DirtGpu, Gpu};
-use dirt_math::Vec3;
 use dirt_render::reference::Reference;
 use dirt_render::{Camera, Mode, Renderer, Settings};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -73,15 +72,8 @@ pub struct RenderArgs {
     traversal: Traversal,
     #[command(flatten)]
     ads: AdsArgs,
-    /// Camera position "X,Y,Z" [default: the scene's first camera, else a framing of the bounds].
-    #[arg(long, value_name = "X,Y,Z", value_parser = crate::args::parse_point, allow_hyphen_values = true)]
-    eye: Option<Vec3>,
-    /// Point the camera looks at, "X,Y,Z".
-    #[arg(long, value_name = "X,Y,Z", value_parser = crate::args::parse_point, allow_hyphen_values = true)]
-    target: Option<Vec3>,
-    /// Vertical field of view in degrees.
-    #[arg(long, value_name = "DEG")]
-    fov: Option<f32>,
+    #[command(flatten)]
+    camera: crate::args::CameraArgs,
     /// A linear EXR of the same size (e.g. a high-spp render) to print the
     /// root-mean-square error against.
     #[arg(long, value_name = "REF.exr")]
@@ -114,12 +106,13 @@ enum RenderBackend {
 fn camera(args: &RenderArgs, scene: &dirt_scene::Scene) -> Result<Camera> {
     let base = Camera::for_scene(scene, args.width as f32 / args.height.max(1) as f32)
         .context("cannot place a camera")?;
-    if args.eye.is_none() && args.target.is_none() && args.fov.is_none() {
+    if args.camera.eye.is_none() && args.camera.target.is_none() && args.camera.fov.is_none() {
         return Ok(base);
     }
-    let eye = args.eye.unwrap_or(base.eye);
-    let target = args.target.unwrap_or(base.eye + base.forward);
+    let eye = args.camera.eye.unwrap_or(base.eye);
+    let target = args.camera.target.unwrap_or(base.eye + base.forward);
     let fov = args
+        .camera
         .fov
         .unwrap_or_else(|| (base.tan_half_fov.atan() * 2.0).to_degrees());
     Ok(Camera::look_at(eye, target, fov)?)

@@ -4,7 +4,6 @@
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use dirt_core::Traversal;
-use dirt_math::Vec3;
 use dirt_render::{Mode, Settings};
 use dirt_view::{Ads, Backend, ViewOptions};
 
@@ -48,15 +47,8 @@ pub struct ViewArgs {
     traversal: Traversal,
     #[command(flatten)]
     pub ads: AdsArgs,
-    /// Camera position "X,Y,Z" [default: the scene's first camera, else a framing of the bounds].
-    #[arg(long, value_name = "X,Y,Z", value_parser = crate::args::parse_point, allow_hyphen_values = true)]
-    eye: Option<Vec3>,
-    /// Point the camera looks at and orbits, "X,Y,Z".
-    #[arg(long, value_name = "X,Y,Z", value_parser = crate::args::parse_point, allow_hyphen_values = true)]
-    target: Option<Vec3>,
-    /// Vertical field of view in degrees.
-    #[arg(long, value_name = "DEG")]
-    fov: Option<f32>,
+    #[command(flatten)]
+    camera: crate::args::CameraArgs,
     /// Exit after N displayed frames (for scripts).
     #[arg(long, value_name = "N")]
     frames: Option<u64>,
@@ -118,9 +110,9 @@ impl ViewArgs {
             },
             traversal: self.traversal,
             ads,
-            eye: self.eye,
-            target: self.target,
-            fov: self.fov,
+            eye: self.camera.eye,
+            target: self.camera.target,
+            fov: self.camera.fov,
             frames: self.frames,
             max_samples: self.max_samples,
             print_every: self.print_every,
