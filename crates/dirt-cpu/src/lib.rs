@@ -10,6 +10,14 @@
 //!
 //! and [`brute_force`], the ground truth the tests compare `trace` with, and
 //! [`cache`], which rebuilds the structure only when geometry or parameters change.
+//!
+//! Peers measured against it: [`grid`] (exact) and [`screen_space`], the
+//! seeds' approximate screen-space tracers:
+//!
+//! | tracer | module | views | per pixel |
+//! |---|---|---|---|
+//! | MMRT (004) | [`screen_space`] | cubemap | all fragments in `B` depth buckets (A-buffer) |
+//! | single layer | [`screen_space`] | one view at the camera | the nearest fragment |
 
 pub mod brute_force;
 pub mod cache;
@@ -18,6 +26,7 @@ pub mod fill_depth;
 pub mod fill_primitives;
 pub mod grid;
 pub mod mip_depth;
+pub mod screen_space;
 pub mod trace;
 mod trace_fast;
 pub mod tracer;
