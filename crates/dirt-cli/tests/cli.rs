@@ -239,6 +239,60 @@ fn cpu_hits_equal_brute_force_hits_byte_for_byte() {
         "0",
     ]);
     assert!(e.contains("density"), "{e}");
+
+    // The approximate tracers run from the command line with their knobs; they
+    // say they are approximate, and most rays still find brute force's primitive.
+    let prims = |bytes: &[u8]| -> Vec<u32> {
+        let w: Vec<u32> = npyz::NpyFile::new(bytes)
+            .expect("npy")
+            .into_vec()
+            .expect("data");
+        w.chunks_exact(4).map(|h| h[0]).collect()
+    };
+    let truth = prims(&b);
+    for args in [
+        &["--backend", "mmrt", "--resolution", "128", "--buckets", "4"][..],
+        &["--backend", "mmrt", "--thickness", "0.02", "--steps", "64"][..],
+    ] {
+        let out = dir.path("approx.npy");
+        let mut cmd = vec!["trace", SCENE, "--rays", s(&rays), "--out", s(&out)];
+        cmd.extend_from_slice(args);
+        let (_, log) = dirt_ok(&cmd);
+        assert!(log.contains("approximate"), "{log}");
+        let got = prims(&fs::read(&out).expect("hits"));
+        let same = got.iter().zip(&truth).filter(|(a, b)| a == b).count();
+        assert!(
+            same > got.len() / 2,
+            "{args:?}: {same} of {} agree",
+            got.len()
+        );
+    }
+    // One depth layer sees only its view: it runs, and finds fewer primitives.
+    let out = dir.path("layer.npy");
+    let (_, log) = dirt_ok(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&out),
+        "--backend",
+        "single-layer",
+    ]);
+    assert!(log.contains("approximate"), "{log}");
+    assert_eq!(prims(&fs::read(&out).expect("hits")).len(), truth.len());
+    let e = dirt_err(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&brute),
+        "--backend",
+        "mmrt",
+        "--thickness=-1",
+    ]);
+    assert!(e.contains("thickness"), "{e}");
 }
 
 #[test]

@@ -39,6 +39,16 @@ pub struct TraceArgs {
     /// Cells per triangle of the grid backend.
     #[arg(long, value_name = "RHO", default_value_t = dirt_cpu::grid::DEFAULT_DENSITY)]
     pub density: f32,
+    /// Thickness behind every fragment of the mmrt and single-layer backends,
+    /// as a fraction of the scene's diagonal.
+    #[arg(long, value_name = "F", default_value_t = dirt_cpu::screen_space::DEFAULT_THICKNESS)]
+    pub thickness: f32,
+    /// Most pixels the mmrt and single-layer backends march per view (0: unbounded).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub steps: u32,
+    /// Eye of the single-layer backend's view [default: the scene's first camera].
+    #[arg(long, value_name = "X,Y,Z", value_parser = crate::args::parse_point, allow_hyphen_values = true)]
+    pub eye: Option<dirt_math::Vec3>,
 }
 
 /// The tracer behind `dirt trace` and `dirt bench`.
@@ -74,6 +84,13 @@ pub enum TraceBackend {
     /// The compact uniform grid (Lagae and Dutré; `--density` cells per
     /// triangle), with DIRT's triangle test: the same hits as brute force.
     Grid,
+    /// APPROXIMATE: the multiview multilayer A-buffer of MMRT (fragments at
+    /// pixel centres of the cubemap, `--resolution`, `--buckets`, hits within
+    /// `--thickness`, `--steps` per view). Its hits may differ from brute force's.
+    Mmrt,
+    /// APPROXIMATE: one depth layer seen from `--eye` (screen-space tracing,
+    /// `--resolution`, `--thickness`, `--steps`): what the view does not see is missed.
+    SingleLayer,
 }
 
 impl fmt::Display for TraceBackend {
@@ -85,6 +102,8 @@ impl fmt::Display for TraceBackend {
             TraceBackend::Obvhs => "obvhs",
             TraceBackend::Embree => "embree",
             TraceBackend::Grid => "grid",
+            TraceBackend::Mmrt => "mmrt",
+            TraceBackend::SingleLayer => "single-layer",
         })
     }
 }
@@ -131,6 +150,9 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         TraceBackend::Grid => Some(Box::new(
             dirt_cpu::grid::Grid::new(args.density).context("--density")?,
         ) as Box<dyn Tracer>),
+        TraceBackend::Mmrt | TraceBackend::SingleLayer => {
+            Some(Box::new(screen_space(args, &scene)?) as Box<dyn Tracer>)
+        }
         _ => None,
     };
     let gpu = match args.backend {
@@ -148,9 +170,12 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     };
     // Brute force builds nothing, so it has no parameters (and no cost model).
     let (params, chosen) = match args.backend {
-        TraceBackend::Brute | TraceBackend::Obvhs | TraceBackend::Embree | TraceBackend::Grid => {
-            (None, None)
-        }
+        TraceBackend::Brute
+        | TraceBackend::Obvhs
+        | TraceBackend::Embree
+        | TraceBackend::Grid
+        | TraceBackend::Mmrt
+        | TraceBackend::SingleLayer => (None, None),
         _ => {
             // On the GPU the choice must fit the device's bindings.
             let limits = gpu.as_ref().map(|g| g.binding_limits());
@@ -213,6 +238,35 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     print_trace(&rays, &hits, trace_time);
     eprintln!("wrote {}", args.out.display());
     Ok(())
+}
+
+/// The approximate screen-space tracer the arguments ask for.
+fn screen_space(
+    args: &TraceArgs,
+    scene: &dirt_scene::Scene,
+) -> Result<dirt_cpu::screen_space::ScreenSpace> {
+    use dirt_cpu::screen_space::{ScreenSpace, ScreenSpaceParams};
+    let mut params = if args.backend == TraceBackend::Mmrt {
+        ScreenSpaceParams::mmrt(args.ads.resolution, args.ads.buckets, args.thickness)
+    } else {
+        let Some(eye) = args
+            .eye
+            .or_else(|| scene.cameras.first().map(|c| c.position))
+        else {
+            anyhow::bail!(
+                "--backend single-layer needs --eye X,Y,Z: the scene {} has no camera",
+                scene.name
+            );
+        };
+        ScreenSpaceParams::single_layer(eye, args.ads.resolution, args.thickness)
+    };
+    params.max_steps = args.steps;
+    eprintln!(
+        "{} is approximate: its hits may differ from brute force's ({})",
+        args.backend,
+        params.label()
+    );
+    ScreenSpace::new(params).with_context(|| format!("--backend {}", args.backend))
 }
 
 fn print_build(built: &BuildReport, total: Duration, backend: TraceBackend) {
