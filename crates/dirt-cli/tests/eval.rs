@@ -137,6 +137,26 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         assert_eq!(&r[differ], "0", "the grid differs from brute force: {r:?}");
     }
     assert_eq!(peers.contains(&"embree"), cfg!(feature = "embree"));
+    // The approximate methods: every setting of the quick sweep on both
+    // scenes (cornell and foliage have cameras), every ray type, with the
+    // error split into its kinds.
+    let (other, missed, false_hits, prim) = (
+        column(&traces, "other_prim"),
+        column(&traces, "missed"),
+        column(&traces, "false_hits"),
+        column(&traces, "differ_prim"),
+    );
+    for (method, settings) in [("mmrt", 2), ("1-layer", 2)] {
+        let rows: Vec<_> = traces[1..]
+            .iter()
+            .filter(|r| &r[backend] == method)
+            .collect();
+        assert_eq!(rows.len(), 2 * settings * 5, "{method} rows");
+        for r in &rows {
+            let n = |c: usize| r[c].parse::<usize>().expect("a count");
+            assert_eq!(n(other) + n(missed) + n(false_hits), n(prim), "{r:?}");
+        }
+    }
 
     let dynamic = csv_rows(&dir.join("dynamic.csv"));
     let (db, dd) = (column(&dynamic, "backend"), column(&dynamic, "differ"));
@@ -170,9 +190,22 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
     }
     // DIRT and the renderer's BVH reference are both exact: the same images.
     let renders = csv_rows(&dir.join("renders.csv"));
-    let same = column(&renders, "same_bits_as_reference_tracer");
+    let (same, exact) = (
+        column(&renders, "same_bits_as_reference_tracer"),
+        column(&renders, "exact"),
+    );
     assert!(renders.len() > 2);
-    assert!(renders[1..].iter().all(|r| &r[same] == "true"));
+    assert!(
+        renders[1..]
+            .iter()
+            .filter(|r| &r[exact] == "true")
+            .all(|r| &r[same] == "true")
+    );
+    // The approximate tracers render too (one line each in the plot).
+    let tracer = column(&renders, "tracer");
+    for m in ["mmrt", "1-layer"] {
+        assert!(renders[1..].iter().any(|r| r[tracer].starts_with(m)), "{m}");
+    }
     let builds = csv_rows(&dir.join("builds.csv"));
     assert!(builds.len() > 10);
     // Leaving out against everything on: every configuration, the same hits.
@@ -198,6 +231,14 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         md.contains("## Leaving out what a scene does not need"),
         "{md}"
     );
+    assert!(
+        md.contains("## Error against run time: the approximate methods"),
+        "{md}"
+    );
+    assert!(md.contains("In words: on "), "{md}");
+    for f in ["knobs_mmrt.svg", "knobs_1-layer.svg"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
     assert!(md.contains("(results/") || md.contains("pareto_cornell.svg"));
     let _ = fs::remove_dir_all(&dir);
 }

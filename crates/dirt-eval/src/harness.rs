@@ -1,5 +1,6 @@
 //! The evaluation run: scenes × parameter grid × ray types × traversals, the
-//! peers and the GPU backend beside DIRT on the CPU, all against brute force.
+//! peers, the grid's densities, the approximate methods ([`crate::approx`])
+//! and the GPU backend beside DIRT on the CPU, all against brute force.
 //!
 //! Every tracer is measured through [`crate::measure`] as a `&mut dyn Tracer`;
 //! the peers come from [`crate::peers::available`] (where a new tracer's one
@@ -11,12 +12,14 @@ use std::time::Instant;
 
 use dirt_core::{AdsParams, CoreError, Tracer, Traversal, ViewsKind};
 use dirt_cpu::brute_force::Brute;
+use dirt_cpu::screen_space::ScreenSpace;
 use dirt_cpu::{Ads, DirtCpu};
 use dirt_gpu::DirtGpu;
 use dirt_math::{Hit, Ray, Triangle};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 
+use crate::approx::ApproxPoint;
 use crate::dynamic::{DynamicConfig, DynamicRow};
 use crate::measure::{self, BuildRow, PerRay, Setting, StatsPass, Structure, Subject, TraceRow};
 use crate::peers::Peer;
@@ -87,6 +90,11 @@ pub struct EvalConfig {
     pub gpu: Option<GpuConfig>,
     /// The peers measured beside DIRT (default: [`crate::peers::available`]).
     pub peers: Vec<Peer>,
+    /// Densities (cells per triangle) of the compact grid measured besides
+    /// the peer's ([`crate::peers::GRID`]): its knob, swept.
+    pub grid_densities: Vec<f32>,
+    /// The approximate methods' settings ([`crate::approx`]).
+    pub approx: Vec<ApproxPoint>,
     pub dynamic: Option<DynamicConfig>,
     pub render: Option<RenderConfig>,
     pub seed: u64,
@@ -127,6 +135,8 @@ impl EvalConfig {
             repeat: 1,
             gpu: None,
             peers: crate::peers::available(),
+            grid_densities: Vec::new(),
+            approx: crate::approx::quick(),
             dynamic: Some(DynamicConfig {
                 grid: 32,
                 animated: true,
@@ -141,6 +151,10 @@ impl EvalConfig {
                 bounces: 3,
                 reference_spp: 64,
                 spp: vec![1, 4, 16],
+                approx: vec![
+                    crate::approx::MMRT_DEFAULT,
+                    crate::approx::SINGLE_LAYER_DEFAULT,
+                ],
             }),
             seed: 1,
             progress: true,
@@ -159,13 +173,16 @@ impl EvalConfig {
                 grid.push(GridPoint::new(ViewsKind::Cube, 128, b, s));
             }
         }
-        for r in [64, 256] {
+        // The papers' reduced configurations: lower resolutions, fewer views.
+        for r in [32, 64, 256] {
             grid.push(GridPoint::new(ViewsKind::Cube, r, 8, 1));
         }
         grid.push(GridPoint::new(ViewsKind::Single, 128, 8, 1));
-        let mut at_camera = GridPoint::new(ViewsKind::Single, 128, 8, 1);
-        at_camera.at_camera = true;
-        grid.push(at_camera);
+        for r in [32, 128] {
+            let mut at_camera = GridPoint::new(ViewsKind::Single, r, 8, 1);
+            at_camera.at_camera = true;
+            grid.push(at_camera);
+        }
         EvalConfig {
             scenes: ["cornell", "layers", "foliage", "spheres"]
                 .iter()
@@ -182,6 +199,8 @@ impl EvalConfig {
                 rays: 2_000,
             }),
             peers: crate::peers::available(),
+            grid_densities: vec![1.0, 2.0, 8.0],
+            approx: crate::approx::sweep(),
             dynamic: Some(DynamicConfig {
                 grid: 128,
                 animated: true,
@@ -196,10 +215,11 @@ impl EvalConfig {
                 bounces: 4,
                 reference_spp: 256,
                 spp: vec![1, 2, 4, 8, 16, 32, 64],
+                approx: vec![crate::approx::MMRT_DEFAULT, crate::approx::SINGLE_LAYER_DEFAULT],
             }),
             seed: 1,
             progress: true,
-            grid_name: "full: cube r128 with B {1, 4, 8, 16, 32} x S {1, 2, 4}; cube r64 and r256 (B8 S1); single r128 B8 S1 outside the scene and at the camera".into(),
+            grid_name: "full: cube r128 with B {1, 4, 8, 16, 32} x S {1, 2, 4}; cube r32, r64 and r256 (B8 S1); single r128 B8 S1 outside the scene; single r32 and r128 B8 S1 at the camera".into(),
         }
     }
 }
@@ -369,6 +389,8 @@ struct Prepared {
     rays: Vec<(RayType, Vec<Ray>)>,
     truth: Vec<Vec<Hit>>,
     camera_eye: Option<dirt_math::Vec3>,
+    /// The eye of the primary rays' camera (the scene's, else one in front of it).
+    primary_eye: dirt_math::Vec3,
     /// List nodes of the default structure.
     nodes: usize,
 }
@@ -482,7 +504,12 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
             None
         }
     };
-    let per_scene = cfg.grid.len() + cfg.peers.len() + usize::from(gpu.is_some()) + 3;
+    let per_scene = cfg.grid.len()
+        + cfg.peers.len()
+        + cfg.grid_densities.len()
+        + cfg.approx.len()
+        + usize::from(gpu.is_some())
+        + 3;
     let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames * d.ray_counts().len())
         + usize::from(cfg.render.is_some());
     let pb = progress_bar(
@@ -576,6 +603,20 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
             measure_peer(&prep, peer, threads, cfg, &mut res)?;
             pb.inc(1);
         }
+        for &density in &cfg.grid_densities {
+            pb.set_message(format!("{label}: grid ρ{density}"));
+            measure_grid(&prep, density, cfg, &mut res)?;
+            pb.inc(1);
+        }
+        for point in &cfg.approx {
+            pb.set_message(format!(
+                "{label}: {} {}",
+                point.method.name(),
+                point.setting().label
+            ));
+            measure_approx(&prep, point, cfg, &mut res)?;
+            pb.inc(1);
+        }
         if let (Some(g), Some(gc)) = (&gpu, cfg.gpu) {
             pb.set_message(format!("{label}: dirt-gpu"));
             if prep.tris.len() <= gc.max_triangles && prep.nodes <= gc.max_nodes {
@@ -641,6 +682,7 @@ fn prepare(
     Ok(Prepared {
         name: label.to_string(),
         camera_eye: rays::Camera::of_scene(scene).map(|c| c.eye),
+        primary_eye: rays::primary_camera(scene)?.eye,
         nodes: reference.lists.ids.len(),
         tris,
         rays,
@@ -738,6 +780,73 @@ fn measure_peer(
         how: peer.how(),
     };
     trace_types(prep, tracer.as_mut(), &subject, plan, res)
+}
+
+/// The compact grid at `density` cells per triangle (exact: held to every bit).
+fn measure_grid(
+    prep: &Prepared,
+    density: f32,
+    cfg: &EvalConfig,
+    res: &mut EvalResults,
+) -> Result<(), EvalError> {
+    let name = crate::peers::grid_name(density);
+    let subject = prep.subject(&name, Setting::default());
+    let mut grid = dirt_cpu::grid::Grid::new(density).map_err(prep.build_err())?;
+    let built = measure::build(&mut grid, &prep.tris, cfg.repeat).map_err(prep.build_err())?;
+    res.builds
+        .push(BuildRow::new(&subject, &built, &Structure::default()));
+    let plan = Plan {
+        rays: None,
+        repeat: cfg.repeat,
+        stats: StatsPass::Prefix(0),
+        per_ray: None,
+        how: Match::Bits,
+    };
+    trace_types(prep, &mut grid, &subject, plan, res)
+}
+
+/// An approximate method at one setting; its error is what is measured.
+fn measure_approx(
+    prep: &Prepared,
+    point: &ApproxPoint,
+    cfg: &EvalConfig,
+    res: &mut EvalResults,
+) -> Result<(), EvalError> {
+    // The single layer looks from the primary rays' eye, as a renderer's depth buffer would.
+    let Some(params) = point.params(Some(prep.primary_eye)) else {
+        return Ok(());
+    };
+    let subject = prep.subject(point.method.name(), point.setting());
+    let mut tracer = ScreenSpace::new(params).map_err(prep.build_err())?;
+    let built = match measure::build(&mut tracer, &prep.tris, cfg.repeat) {
+        Ok(b) => b,
+        // A setting whose A-buffer would not fit its limits is noted, not measured.
+        Err(e @ CoreError::InvalidParams(_)) => {
+            res.notes.push(format!(
+                "{}: {} {} skipped: {e}",
+                prep.name,
+                point.method.name(),
+                point.setting().label
+            ));
+            return Ok(());
+        }
+        Err(e) => return Err(prep.build_err()(e)),
+    };
+    // The A-buffer is the id buffer of 004; its model is 004's Table 2.
+    let structure = Structure {
+        nodes: Some(tracer.fragments() as u64),
+        depth_hiz: None,
+        id_buffer: Some((tracer.memory_bytes(), Some(tracer.model_bytes() as f64))),
+    };
+    res.builds.push(BuildRow::new(&subject, &built, &structure));
+    let plan = Plan {
+        rays: None,
+        repeat: cfg.repeat,
+        stats: StatsPass::Prefix(0),
+        per_ray: None,
+        how: Match::PEER,
+    };
+    trace_types(prep, &mut tracer, &subject, plan, res)
 }
 
 fn measure_gpu(

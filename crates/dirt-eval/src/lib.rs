@@ -9,7 +9,12 @@
 //!   DIRT on the CPU and (on small scenes) on the GPU;
 //! * the same build and trace figures for the peers ([`peers`]: obvhs and,
 //!   with the `embree` feature, Embree 3);
-//! * the error of every setting: rays whose hit differs from brute force's;
+//! * the error of every setting: rays whose hit differs from brute force's,
+//!   split into another primitive, missed and false hits, with the relative
+//!   error of `t` ([`Disagreement`]);
+//! * the seeds' approximate tracers ([`approx`]: MMRT's A-buffer and one
+//!   depth layer) with their knobs swept, so that error against time is a
+//!   trade, and the compact grid's density swept;
 //! * the per-frame cost (rebuild + trace) on a deforming scene ([`dynamic`]);
 //! * the image error (RMSE, FLIP) of path-traced renders against a converged
 //!   reference as samples accumulate, against wall time ([`renders`]).
@@ -29,6 +34,7 @@
 //! rayon's global pool; Embree builds with the same number of threads; the
 //! obvhs build is single-threaded.
 
+pub mod approx;
 pub mod dynamic;
 pub mod harness;
 pub mod leave_out;
@@ -84,8 +90,13 @@ pub enum EvalError {
     Config(String),
 }
 
-/// How many of the compared rays differ from the truth.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+/// How many of the compared rays differ from the truth, and how.
+///
+/// Every ray whose primitive differs is exactly one of `other_prim` (both
+/// hit, another primitive), `missed` (the truth hits, the tracer misses) and
+/// `false_hits` (the truth misses, the tracer hits): their sum is
+/// `differ_prim`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Disagreement {
     /// Rays compared (a prefix of the traced rays).
     pub compared: usize,
@@ -93,6 +104,25 @@ pub struct Disagreement {
     pub differ: usize,
     /// Rays whose primitive (or hit/miss) differs.
     pub differ_prim: usize,
+    /// Both hit, another primitive.
+    pub other_prim: usize,
+    /// The truth hits, the tracer misses.
+    pub missed: usize,
+    /// The truth misses, the tracer hits.
+    pub false_hits: usize,
+    /// Rays where both hit (any primitive): the ones `t` is compared on.
+    pub both_hit: usize,
+    /// Mean of `|t - t_true| / t_true` over the rays where both hit (0 when none).
+    pub t_rel_mean: f64,
+    /// Largest `|t - t_true| / t_true` over the rays where both hit.
+    pub t_rel_max: f64,
+}
+
+impl Disagreement {
+    /// `count` in % of the compared rays (0 when none were compared).
+    pub fn pct(&self, count: usize) -> f64 {
+        100.0 * count as f64 / self.compared.max(1) as f64
+    }
 }
 
 /// What counts as the same hit.
@@ -118,6 +148,7 @@ pub fn compare(got: &[Hit], truth: &[Hit], how: Match) -> Disagreement {
         compared: n,
         ..Disagreement::default()
     };
+    let mut t_rel_sum = 0.0f64;
     for (g, t) in got[..n].iter().zip(&truth[..n]) {
         let same = match how {
             Match::Bits => g.bits() == t.bits(),
@@ -129,6 +160,25 @@ pub fn compare(got: &[Hit], truth: &[Hit], how: Match) -> Disagreement {
         };
         d.differ += usize::from(!same);
         d.differ_prim += usize::from(g.prim != t.prim);
+        match (g.is_hit(), t.is_hit()) {
+            (true, true) => {
+                d.other_prim += usize::from(g.prim != t.prim);
+                d.both_hit += 1;
+                let e = if g.t.to_bits() == t.t.to_bits() {
+                    0.0
+                } else {
+                    f64::from((g.t - t.t).abs()) / f64::from(t.t.abs()).max(f64::MIN_POSITIVE)
+                };
+                t_rel_sum += e;
+                d.t_rel_max = d.t_rel_max.max(e);
+            }
+            (false, true) => d.missed += 1,
+            (true, false) => d.false_hits += 1,
+            (false, false) => {}
+        }
+    }
+    if d.both_hit > 0 {
+        d.t_rel_mean = t_rel_sum / d.both_hit as f64;
     }
     d
 }
@@ -153,23 +203,34 @@ mod tests {
         };
         let got = [a, b, c, d, Hit::MISS];
         let truth = [a, a, a, a, a];
-        assert_eq!(
-            compare(&got, &truth, Match::Bits),
-            Disagreement {
-                compared: 5,
-                differ: 4,
-                differ_prim: 2
-            }
-        );
+        let ulp = f64::from(d.t - a.t) / 2.0;
+        let expected = Disagreement {
+            compared: 5,
+            differ: 4,
+            differ_prim: 2,
+            other_prim: 1,
+            missed: 1,
+            false_hits: 0,
+            both_hit: 4,
+            t_rel_mean: ulp / 4.0,
+            t_rel_max: ulp,
+        };
+        assert_eq!(compare(&got, &truth, Match::Bits), expected);
         // One ulp of t is within the peers' tolerance; another primitive is not.
         assert_eq!(
             compare(&got, &truth, Match::PEER),
             Disagreement {
-                compared: 5,
                 differ: 2,
-                differ_prim: 2
+                ..expected
             }
         );
+        // A hit where the truth misses is a false hit.
+        let f = compare(&[a, Hit::MISS], &[Hit::MISS, Hit::MISS], Match::Bits);
+        assert_eq!(
+            (f.false_hits, f.missed, f.both_hit, f.differ_prim),
+            (1, 0, 0, 1)
+        );
+        assert_eq!((f.t_rel_mean, f.pct(f.false_hits)), (0.0, 50.0));
         let far = Hit { t: 2.1, ..a };
         assert_eq!(compare(&[far], &[a], Match::PEER).differ, 1);
         assert_eq!(compare(&got[..2], &truth, Match::Bits).compared, 2);

@@ -393,6 +393,16 @@ pub struct TraceRow {
     pub compared: usize,
     pub differ: usize,
     pub differ_prim: usize,
+    /// Of `differ_prim`: both hit another primitive, the truth's hit missed,
+    /// a hit where the truth misses ([`Disagreement`]).
+    pub other_prim: usize,
+    pub missed: usize,
+    pub false_hits: usize,
+    /// Compared rays where both hit (any primitive).
+    pub both_hit: usize,
+    /// Relative error of `t` over the compared rays where both hit (none when no ray did).
+    pub t_rel_mean: Option<f64>,
+    pub t_rel_max: Option<f64>,
     /// Continuation rounds of the GPU's trace (rays that spent a dispatch's
     /// work budget continued in further dispatches); empty when none.
     pub continuation_rounds: Option<usize>,
@@ -420,6 +430,12 @@ impl TraceRow {
             compared: d.compared,
             differ: d.differ,
             differ_prim: d.differ_prim,
+            other_prim: d.other_prim,
+            missed: d.missed,
+            false_hits: d.false_hits,
+            both_hit: d.both_hit,
+            t_rel_mean: (d.both_hit > 0).then_some(d.t_rel_mean),
+            t_rel_max: (d.both_hit > 0).then_some(d.t_rel_max),
             continuation_rounds: (m.continuation_rounds > 0).then_some(m.continuation_rounds),
         }
     }

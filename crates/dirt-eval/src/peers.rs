@@ -51,6 +51,11 @@ impl Peer {
 /// The grid's name in the rows: its density is the paper's.
 pub const GRID: &str = "grid ρ4";
 
+/// The name of the grid's rows at `density` cells per triangle ([`GRID`] at the default).
+pub fn grid_name(density: f32) -> String {
+    format!("grid ρ{density}")
+}
+
 /// The peers this build has, one line each (Embree only with the `embree` feature).
 pub fn available() -> Vec<Peer> {
     vec![

@@ -1,5 +1,7 @@
 //! SVG plots of a run with `plotters`: a Pareto plot per scene (error against
-//! time over the grid, peers beside), build and trace time against B and S,
+//! time over the grid, the peers and the approximate methods, the frontier
+//! drawn), the approximate methods' error against each knob, build and trace
+//! time against B and S,
 //! and the per-frame cost of the deforming scene.
 
 use std::collections::BTreeMap;
@@ -59,12 +61,14 @@ pub struct ParetoPoint {
     pub label: String,
     /// Build + trace of every ray type, ms.
     pub time_ms: f64,
-    /// Rays differing from brute force, in % of the compared rays.
+    /// Rays whose primitive (or hit/miss) differs from brute force's, in %
+    /// of the compared rays (`t` errors are tabled in the report).
     pub error_pct: f64,
 }
 
-/// The points of one scene: every (setting, traversal) of DIRT on the CPU and
-/// every peer, each with its build plus the trace of all ray types.
+/// The points of one scene: every (setting, traversal) of DIRT on the CPU,
+/// every peer, every density of the grid and every setting of the
+/// approximate methods, each with its build plus the trace of all ray types.
 pub fn pareto_points(res: &EvalResults, scene: &str) -> Vec<ParetoPoint> {
     let mut groups: BTreeMap<(String, String, String), Vec<&TraceRow>> = BTreeMap::new();
     for t in res.traces.iter().filter(|t| t.scene == scene) {
@@ -86,15 +90,18 @@ pub fn pareto_points(res: &EvalResults, scene: &str) -> Vec<ParetoPoint> {
                 .build_ms;
             let trace: f64 = rows.iter().map(|r| r.trace_ms).sum();
             let compared: usize = rows.iter().map(|r| r.compared).sum();
-            let differ: usize = rows.iter().map(|r| r.differ).sum();
-            let series = if backend == "dirt-cpu" {
-                format!("dirt-cpu {traversal}")
+            let differ: usize = rows.iter().map(|r| r.differ_prim).sum();
+            // The grid's densities are one method; its label says the density.
+            let (series, label) = if backend == "dirt-cpu" {
+                (format!("dirt-cpu {traversal}"), setting)
+            } else if let Some(density) = backend.strip_prefix("grid ") {
+                ("grid".to_string(), density.to_string())
             } else {
-                backend.clone()
+                (backend.clone(), setting)
             };
             Some(ParetoPoint {
                 series,
-                label: setting,
+                label,
                 time_ms: build + trace,
                 error_pct: 100.0 * differ as f64 / compared.max(1) as f64,
             })
@@ -122,6 +129,22 @@ pub fn write_all(res: &EvalResults, dir: &Path) -> Result<Vec<Plot>, EvalError> 
                     "build and trace time against {knob}, relative to the default (cube, r128)"
                 ),
                 file: file.into(),
+                scene: None,
+            });
+        }
+    }
+    for method in [
+        crate::approx::Method::Mmrt,
+        crate::approx::Method::SingleLayer,
+    ] {
+        let file = format!("knobs_{}.svg", method.name());
+        if approx_knobs(res, method, &dir.join(&file))? {
+            plots.push(Plot {
+                title: format!(
+                    "{}: error against each knob, the others at their defaults",
+                    method.name()
+                ),
+                file,
                 scene: None,
             });
         }
@@ -165,7 +188,7 @@ fn pareto(points: &[ParetoPoint], title: &str, path: &Path) -> Result<(), EvalEr
         .configure_mesh()
         .x_desc("build + trace of all ray types, ms (log)")
         .x_label_formatter(&|v| short(*v))
-        .y_desc("rays differing from brute force, %")
+        .y_desc("rays with another primitive or hit/miss, %")
         .draw()
         .map_err(|e| plot_err(path, e))?;
     let mut series: Vec<&str> = points.iter().map(|p| p.series.as_str()).collect();
@@ -385,6 +408,140 @@ fn dynamic(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
 }
 
 /// RMSE and FLIP against wall time, one line per tracer.
+/// The value of knob `key` (`r`, `B`, `th`, `steps`) in an approximate
+/// method's setting label, e.g. `r128 B8 th1e-2`; `steps` is 0 when absent.
+fn knob(label: &str, key: &str) -> Option<f64> {
+    let v = label
+        .split(' ')
+        .find_map(|w| w.strip_prefix(key).and_then(|v| v.parse::<f64>().ok()));
+    if key == "steps" {
+        return Some(v.unwrap_or(0.0));
+    }
+    v
+}
+
+/// Error (% of rays with another primitive or hit/miss, all ray types) of an
+/// approximate method against each of its knobs, the other knobs at the
+/// method's default, one line per scene. Returns false when nothing was swept.
+fn approx_knobs(
+    res: &EvalResults,
+    method: crate::approx::Method,
+    path: &Path,
+) -> Result<bool, EvalError> {
+    use crate::approx::{MMRT_DEFAULT, Method, SINGLE_LAYER_DEFAULT};
+    let default = match method {
+        Method::Mmrt => MMRT_DEFAULT,
+        Method::SingleLayer => SINGLE_LAYER_DEFAULT,
+    }
+    .setting()
+    .label;
+    let knobs: &[(&str, &str)] = match method {
+        Method::Mmrt => &[
+            ("r", "resolution"),
+            ("B", "buckets B"),
+            ("th", "thickness / diagonal"),
+            ("steps", "steps per view (0: unbounded)"),
+        ],
+        Method::SingleLayer => &[
+            ("r", "resolution"),
+            ("th", "thickness / diagonal"),
+            ("steps", "steps per view (0: unbounded)"),
+        ],
+    };
+    // (scene, label) -> error %.
+    let mut err: BTreeMap<(String, String), (usize, usize)> = BTreeMap::new();
+    for t in res.traces.iter().filter(|t| t.backend == method.name()) {
+        let e = err.entry((t.scene.clone(), t.setting.clone())).or_default();
+        e.0 += t.differ_prim;
+        e.1 += t.compared;
+    }
+    if err.len() < 2 {
+        return Ok(false);
+    }
+    let others_default = |label: &str, key: &str| {
+        knobs
+            .iter()
+            .filter(|(k, _)| *k != key)
+            .all(|(k, _)| knob(label, k) == knob(&default, k))
+    };
+    let root = SVGBackend::new(path, (360 * knobs.len() as u32, 340)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let areas = root.split_evenly((1, knobs.len()));
+    let scenes: Vec<&str> = res.scenes.iter().map(|s| s.name.as_str()).collect();
+    for (area, (key, name)) in areas.iter().zip(knobs) {
+        // scene -> (knob value, error %), sorted by value.
+        let mut lines: BTreeMap<&str, Vec<(f64, f64)>> = BTreeMap::new();
+        for ((scene, label), (d, c)) in &err {
+            if let (Some(x), true) = (knob(label, key), others_default(label, key)) {
+                let pct = 100.0 * *d as f64 / (*c).max(1) as f64;
+                lines.entry(scene.as_str()).or_default().push((x, pct));
+            }
+        }
+        for l in lines.values_mut() {
+            l.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        let xs = lines.values().flatten().map(|p| p.0);
+        let xmin = xs.clone().fold(f64::INFINITY, f64::min);
+        let xmax = xs.fold(f64::NEG_INFINITY, f64::max);
+        if !(xmin.is_finite() && xmax > xmin) {
+            continue;
+        }
+        let ymax = lines.values().flatten().map(|p| p.1).fold(1.0, f64::max) * 1.1;
+        let log = *key != "steps" && *key != "B" && xmin > 0.0;
+        let (x0, x1) = if log {
+            (xmin / 1.2, xmax * 1.2)
+        } else {
+            (xmin - 0.05 * (xmax - xmin), xmax + 0.05 * (xmax - xmin))
+        };
+        let caption = (format!("{}: {name}", method.name()), ("sans-serif", 14));
+        let mut builder = ChartBuilder::on(area);
+        builder
+            .caption(caption.0, caption.1)
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(45);
+        // One drawing path for both scales: plotters' log and linear axes are different types.
+        macro_rules! draw {
+            ($chart:expr) => {{
+                let mut chart = $chart.map_err(|e| plot_err(path, e))?;
+                chart
+                    .configure_mesh()
+                    .x_desc(*name)
+                    .y_desc("another primitive or hit/miss, %")
+                    .x_label_formatter(&|v| short(*v))
+                    .draw()
+                    .map_err(|e| plot_err(path, e))?;
+                for (scene, pts) in &lines {
+                    let i = scenes.iter().position(|s| s == scene).unwrap_or(0);
+                    let c = COLORS[i % COLORS.len()];
+                    chart
+                        .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+                        .map_err(|e| plot_err(path, e))?
+                        .label(*scene)
+                        .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], c));
+                    chart
+                        .draw_series(pts.iter().map(|p| Circle::new(*p, 3, c.filled())))
+                        .map_err(|e| plot_err(path, e))?;
+                }
+                chart
+                    .configure_series_labels()
+                    .border_style(BLACK)
+                    .background_style(WHITE.mix(0.8))
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()
+                    .map_err(|e| plot_err(path, e))?;
+            }};
+        }
+        if log {
+            draw!(builder.build_cartesian_2d((x0..x1).log_scale(), 0.0..ymax));
+        } else {
+            draw!(builder.build_cartesian_2d(x0..x1, 0.0..ymax));
+        }
+    }
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(true)
+}
+
 fn renders(res: &EvalResults, path: &Path) -> Result<(), EvalError> {
     let root = SVGBackend::new(path, (960, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;

@@ -678,11 +678,18 @@ fn cosine_hemisphere(n: Vec3, rng: &mut Pcg32) -> Vec3 {
 
 /// Rays of every type of 001 Table 1, `count` of each, deterministic for `seed`.
 ///
-/// Primary rays come from the scene's first camera (else one in front of the
-/// scene). Secondary rays start at primary hits, found with `closest` (any
+/// Primary rays come from [`primary_camera`]. Secondary rays start at primary hits, found with `closest` (any
 /// exact tracer), cycling through the hits in order; they start a small
 /// offset (`1e-4` of the scene diagonal) off the surface along its geometric
 /// normal, facing the incoming ray. Fails when no primary ray hits anything.
+/// The camera of [`table1`]'s primary rays: the scene's first camera, else
+/// one in front of the scene.
+pub fn primary_camera(scene: &Scene) -> Result<Camera, EvalError> {
+    let bounds = checked_bounds(&scene.triangles)?;
+    let diag = bounds.extent().length().max(1e-3);
+    Ok(Camera::of_scene(scene).unwrap_or_else(|| Camera::in_front_of(&bounds, diag)))
+}
+
 pub fn table1(
     scene: &Scene,
     count: usize,
@@ -692,7 +699,7 @@ pub fn table1(
     let tris = &scene.triangles;
     let bounds = checked_bounds(tris)?;
     let diag = bounds.extent().length().max(1e-3);
-    let camera = Camera::of_scene(scene).unwrap_or_else(|| Camera::in_front_of(&bounds, diag));
+    let camera = primary_camera(scene)?;
     let primary = generate(tris, Some(camera), RayKind::Camera, count, seed)?;
     let hits = closest(&primary);
     let points: Vec<(Vec3, Vec3, Vec3)> = primary

@@ -1,7 +1,10 @@
 //! Image error of `dirt-render` path tracing against a converged reference:
 //! RMSE (linear radiance) and FLIP (`nv-flip`, on the tone-mapped sRGB
-//! images) as samples accumulate, against wall time, for DIRT on the CPU and
-//! the renderer's obvhs BVH reference tracer.
+//! images) as samples accumulate, against wall time, for DIRT on the CPU,
+//! the renderer's obvhs BVH reference tracer and the approximate methods
+//! ([`crate::approx`]). The renderer confirms primary hits with the exact
+//! triangle test (`direct_visibility`), so an approximate tracer's error
+//! shows in the bounces and shadow rays, as it would in a deferred renderer.
 //!
 //! The renderer's random numbers are a pure function of (seed, pixel,
 //! sample, ...), so a render of `k` samples is exactly the first `k` samples
@@ -13,12 +16,14 @@ use std::time::Instant;
 
 use dirt_core::{Tracer, Traversal};
 use dirt_cpu::DirtCpu;
+use dirt_cpu::screen_space::ScreenSpace;
 use dirt_render::output::Image;
 use dirt_render::reference::Reference;
 use dirt_render::{Camera, Renderer, Settings};
 use serde::Serialize;
 
 use crate::EvalError;
+use crate::approx::ApproxPoint;
 use crate::measure::ms;
 
 /// What to render.
@@ -33,6 +38,9 @@ pub struct RenderConfig {
     pub reference_spp: u32,
     /// Sample counts of the curve.
     pub spp: Vec<u32>,
+    /// Approximate methods rendered beside the exact tracers (the single
+    /// layer looks from the render's camera).
+    pub approx: Vec<ApproxPoint>,
 }
 
 /// One render.
@@ -51,8 +59,10 @@ pub struct RenderRow {
     pub rmse: f64,
     /// Mean FLIP error (0 = identical to the reference as seen).
     pub flip: f64,
-    /// Whether the image equals, bit for bit, the other tracer's image of the
-    /// same samples (both tracers are exact, so it must).
+    /// Whether the tracer promises brute force's hits.
+    pub exact: bool,
+    /// Whether the image equals, bit for bit, the reference tracer's image of
+    /// the same samples (an exact tracer's must).
     pub same_bits_as_reference_tracer: bool,
 }
 
@@ -136,20 +146,45 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
     };
 
     let mut rows = Vec::new();
+    // The tracers of the curve: 0 DIRT, 1 the renderer's reference, then the approximate ones.
+    let approx: Vec<(String, dirt_cpu::screen_space::ScreenSpaceParams)> = cfg
+        .approx
+        .iter()
+        .filter_map(|p| {
+            let params = p.params(Some(camera.eye))?;
+            Some((format!("{} {}", p.method.name(), p.setting().label), params))
+        })
+        .collect();
     for &spp in &cfg.spp {
         let run_settings = settings(spp, 1);
         let renderer = Renderer::new(&scene, camera, run_settings).map_err(render_err)?;
+        let first = rows.len();
         let mut images = Vec::new();
-        for which in 0..2 {
+        for which in 0..2 + approx.len() {
             let start = Instant::now();
-            let mut tracer: Box<dyn Tracer> = if which == 0 {
+            let (name, mut tracer): (String, Box<dyn Tracer>) = match which {
                 // The library's default: the cost model chooses for this render's
-                // rays (an upper bound), inside the wall time.
-                let mut dirt = DirtCpu::auto(Traversal::HiZ, run_settings.max_rays());
-                dirt.build(&scene.triangles).map_err(render_err)?;
-                Box::new(dirt)
-            } else {
-                Box::new(Reference::new(&scene.triangles))
+                // rays (an upper bound), inside the wall time. One name for every
+                // spp (the plot draws a line per tracer); the choice, which may
+                // differ per spp, is in the notes' tracer names.
+                0 => {
+                    let mut dirt = DirtCpu::auto(Traversal::HiZ, run_settings.max_rays());
+                    dirt.build(&scene.triangles).map_err(render_err)?;
+                    (
+                        "dirt-cpu (hiz, the cost model's choice)".into(),
+                        Box::new(dirt),
+                    )
+                }
+                1 => (
+                    "obvhs bvh2 (renderer reference)".into(),
+                    Box::new(Reference::new(&scene.triangles)),
+                ),
+                k => {
+                    let (name, params) = &approx[k - 2];
+                    let mut t = ScreenSpace::new(*params).map_err(render_err)?;
+                    t.build(&scene.triangles).map_err(render_err)?;
+                    (name.clone(), Box::new(t))
+                }
             };
             let r = renderer
                 .render(&mut tracer, &mut |_| {})
@@ -159,13 +194,7 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
             let flip = flip(&reference, &r.image)?;
             rows.push(RenderRow {
                 scene: scene.name.clone(),
-                // One name for every spp (the plot draws a line per tracer); the
-                // choice, which may differ per spp, is in the notes' tracer names.
-                tracer: if which == 0 {
-                    "dirt-cpu (hiz, the cost model's choice)".into()
-                } else {
-                    "obvhs bvh2 (renderer reference)".into()
-                },
+                tracer: name,
                 width: cfg.width,
                 height: cfg.height,
                 spp,
@@ -174,14 +203,14 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
                 rays: r.rays,
                 rmse,
                 flip,
+                exact: which < 2,
                 same_bits_as_reference_tracer: false,
             });
             images.push(r.image);
         }
-        let same = images[0].bits() == images[1].bits();
-        let n = rows.len();
-        rows[n - 2].same_bits_as_reference_tracer = same;
-        rows[n - 1].same_bits_as_reference_tracer = same;
+        for (row, image) in rows[first..].iter_mut().zip(&images) {
+            row.same_bits_as_reference_tracer = image.bits() == images[1].bits();
+        }
     }
     Ok((rows, reference_info, reference))
 }
@@ -215,11 +244,21 @@ mod tests {
             bounces: 2,
             reference_spp: 32,
             spp: vec![1, 8],
+            approx: vec![crate::approx::MMRT_DEFAULT],
         };
         let (rows, reference, _) = run(&cfg).expect("render");
-        assert_eq!(rows.len(), 4);
+        assert_eq!(rows.len(), 6);
         assert_eq!(reference.spp, 32);
-        assert!(rows.iter().all(|r| r.same_bits_as_reference_tracer));
+        assert!(
+            rows.iter()
+                .filter(|r| r.exact)
+                .all(|r| r.same_bits_as_reference_tracer)
+        );
+        // The approximate tracer renders, and its image is not the exact one.
+        let mmrt: Vec<&RenderRow> = rows.iter().filter(|r| !r.exact).collect();
+        assert_eq!(mmrt.len(), 2);
+        assert!(mmrt[0].tracer.starts_with("mmrt"));
+        assert!(mmrt.iter().all(|r| r.rmse.is_finite() && r.rays > 0));
         let dirt: Vec<&RenderRow> = rows
             .iter()
             .filter(|r| r.tracer.starts_with("dirt"))

@@ -1,7 +1,8 @@
 //! `dirt eval`: the evaluation harness (`dirt_eval`) from the command line.
 //!
 //! Measures DIRT (CPU, and GPU on small scenes), obvhs and Embree (with the
-//! `embree` feature) over scenes and a parameter grid against brute force,
+//! `embree` feature), the compact grid and the approximate methods (MMRT's
+//! A-buffer, one depth layer) over scenes and a parameter grid against brute force,
 //! then writes CSV, JSON, SVG plots and a Markdown summary to `--out`, and
 //! the same summary to `--report` (e.g. `docs/RESULTS.md`).
 
@@ -42,6 +43,9 @@ pub struct EvalArgs {
     /// Skip the path-traced renders (image error against time).
     #[arg(long)]
     no_render: bool,
+    /// Skip the approximate methods (MMRT's A-buffer, one depth layer).
+    #[arg(long)]
+    no_approx: bool,
     /// Frames of the deforming scene.
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
@@ -117,6 +121,12 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     if args.no_render {
         cfg.render = None;
     }
+    if args.no_approx {
+        cfg.approx.clear();
+        if let Some(r) = cfg.render.as_mut() {
+            r.approx.clear();
+        }
+    }
     if args.no_dynamic {
         cfg.dynamic = None;
     } else if let Some(f) = args.frames {
@@ -134,11 +144,12 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     }
     cfg.seed = args.seed;
     eprintln!(
-        "dirt eval: {} scene(s), {} grid point(s), {} rays per type, {} peer(s), rayon threads {}",
+        "dirt eval: {} scene(s), {} grid point(s), {} rays per type, {} peer(s), {} approximate setting(s), rayon threads {}",
         cfg.scenes.len(),
         cfg.grid.len(),
         cfg.rays,
         cfg.peers.len(),
+        cfg.approx.len(),
         rayon::current_num_threads()
     );
     let mut res = dirt_eval::run(&cfg).context("evaluation failed")?;
@@ -147,7 +158,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     let files = dirt_eval::report::write_all(&res, &args.out, args.report.as_deref())
         .context("cannot write the results")?;
     // DIRT and the grid share the triangle test: any difference is a defect.
-    let exact = |backend: &str| backend.starts_with("dirt") || backend == dirt_eval::peers::GRID;
+    let exact = |backend: &str| backend.starts_with("dirt") || backend.starts_with("grid");
     let dirt_errors: usize = res
         .traces
         .iter()
