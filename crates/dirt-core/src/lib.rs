@@ -30,7 +30,7 @@ pub use error::CoreError;
 pub use limits::{BindingLimits, SplitArray};
 pub use lists::{BuildTimings, IdLists};
 pub use params::{AdsParams, Traversal};
-pub use tracer::{BuildReport, TraceReport, Tracer, check_lengths};
+pub use tracer::{BuildReport, TraceReport, Tracer, check_lengths, trace_each};
 pub use views::{
     LeftOutReason, LeftOutView, left_out_views, views_for, views_for_all, views_reached,
 };

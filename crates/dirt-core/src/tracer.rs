@@ -88,6 +88,23 @@ pub fn check_lengths(
     Ok(())
 }
 
+/// The body of a [`Tracer::trace_into`] whose rays are independent and
+/// count no statistics: checks the lengths, then `hits[i] = closest(&rays[i])`
+/// on rayon's pool.
+pub fn trace_each(
+    rays: &[Ray],
+    hits: &mut [Hit],
+    stats: Option<&[RayStats]>,
+    closest: impl Fn(&Ray) -> Hit + Sync,
+) -> Result<TraceReport, CoreError> {
+    use rayon::prelude::*;
+    check_lengths(rays, hits, stats)?;
+    rays.par_iter()
+        .zip(hits.par_iter_mut())
+        .for_each(|(r, h)| *h = closest(r));
+    Ok(TraceReport::default())
+}
+
 impl<T: Tracer + ?Sized> Tracer for &mut T {
     fn name(&self) -> String {
         (**self).name()

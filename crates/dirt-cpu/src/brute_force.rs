@@ -2,7 +2,7 @@
 //! and the same tie-break as `trace`.
 
 use dirt_core::{
-    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, check_lengths,
+    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, trace_each,
 };
 use dirt_math::triangle::{RayShear, intersect_closest};
 use rayon::prelude::*;
@@ -60,11 +60,7 @@ impl Tracer for Brute {
         hits: &mut [Hit],
         stats: Option<&mut [RayStats]>,
     ) -> Result<TraceReport, CoreError> {
-        check_lengths(rays, hits, stats.as_deref())?;
         let tris = &self.tris;
-        rays.par_iter()
-            .zip(hits.par_iter_mut())
-            .for_each(|(r, h)| *h = trace_ray(tris, r));
-        Ok(TraceReport::default())
+        trace_each(rays, hits, stats.as_deref(), |r| trace_ray(tris, r))
     }
 }

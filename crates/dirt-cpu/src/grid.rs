@@ -28,11 +28,10 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use dirt_core::{
-    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, check_lengths,
+    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, trace_each,
 };
 use dirt_math::triangle::{RayShear, intersect_closest};
 use dirt_math::{Aabb, Vec3};
-use rayon::prelude::*;
 
 /// The density the compact-grid paper found best for time to image.
 pub const DEFAULT_DENSITY: f32 = 4.0;
@@ -352,16 +351,12 @@ impl Tracer for Grid {
         hits: &mut [Hit],
         stats: Option<&mut [RayStats]>,
     ) -> Result<TraceReport, CoreError> {
-        check_lengths(rays, hits, stats.as_deref())?;
         if !self.built {
             return Err(CoreError::NotBuilt {
                 tracer: self.name(),
             });
         }
         let g = &*self;
-        rays.par_iter()
-            .zip(hits.par_iter_mut())
-            .for_each(|(r, h)| *h = g.trace_ray(r));
-        Ok(TraceReport::default())
+        trace_each(rays, hits, stats.as_deref(), |r| g.trace_ray(r))
     }
 }

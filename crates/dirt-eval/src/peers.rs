@@ -20,9 +20,8 @@
 use std::time::Duration;
 
 use dirt_core::{
-    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, check_lengths,
+    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, trace_each,
 };
-use rayon::prelude::*;
 
 /// A peer of the evaluation: its name and how to make it.
 #[derive(Clone, Copy, Debug)]
@@ -178,13 +177,11 @@ impl Tracer for Obvhs {
         hits: &mut [Hit],
         stats: Option<&mut [RayStats]>,
     ) -> Result<TraceReport, CoreError> {
-        check_lengths(rays, hits, stats.as_deref())?;
         let bvh = built(&self.bvh, "obvhs")?;
         let tris = &self.tris;
-        rays.par_iter()
-            .zip(hits.par_iter_mut())
-            .for_each(|(r, h)| *h = Obvhs::trace_ray(bvh, tris, r));
-        Ok(TraceReport::default())
+        trace_each(rays, hits, stats.as_deref(), |r| {
+            Obvhs::trace_ray(bvh, tris, r)
+        })
     }
 }
 
@@ -195,7 +192,9 @@ pub mod embree {
     //! 64-byte aligned mask; single rays avoid that).
 
     use super::*;
+    use dirt_core::check_lengths;
     use embree3::{BufferUsage, Config, Device, Format, GeometryKind, IntersectContext, RayHit};
+    use rayon::prelude::*;
 
     /// An Embree device and the scene of its last build.
     pub struct Embree {
