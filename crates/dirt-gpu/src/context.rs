@@ -37,6 +37,35 @@ impl GpuOptions {
 /// [`BindingLimits::for_device`]).
 pub const STORAGE_BUFFERS_PER_STAGE: u32 = BindingLimits::MIN_STORAGE_BUFFERS;
 
+/// The device dirt asks `adapter` for: the adapter's storage-buffer binding
+/// and buffer sizes and workgroup counts (the structure's arrays are dealt
+/// over bindings by [`BindingLimits::for_device`]), storage buffers per stage
+/// raised towards [`BindingLimits::MAX_STORAGE_BUFFERS`] where the adapter
+/// allows, and SPIR-V passthrough where it has it (the exact path,
+/// [`exact_path`]). An application that opens the device it hands to
+/// [`Gpu::from_device`] can ask for the same (adding its own needs).
+pub fn device_descriptor<'a>(
+    adapter: &wgpu::Adapter,
+    label: &'a str,
+) -> wgpu::DeviceDescriptor<'a> {
+    let supported = adapter.limits();
+    wgpu::DeviceDescriptor {
+        label: Some(label),
+        required_features: adapter.features() & wgpu::Features::PASSTHROUGH_SHADERS,
+        required_limits: wgpu::Limits {
+            max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
+            max_storage_buffers_per_shader_stage: supported
+                .max_storage_buffers_per_shader_stage
+                .min(BindingLimits::MAX_STORAGE_BUFFERS)
+                .max(wgpu::Limits::default().max_storage_buffers_per_shader_stage),
+            max_buffer_size: supported.max_buffer_size,
+            max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
 /// A device ready to run dirt's passes.
 #[derive(Debug)]
 pub struct Gpu {
@@ -167,24 +196,8 @@ impl Gpu {
             })
             .await
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
-        let supported = adapter.limits();
-        let limits = wgpu::Limits {
-            max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
-            max_storage_buffers_per_shader_stage: supported
-                .max_storage_buffers_per_shader_stage
-                .min(BindingLimits::MAX_STORAGE_BUFFERS)
-                .max(wgpu::Limits::default().max_storage_buffers_per_shader_stage),
-            max_buffer_size: supported.max_buffer_size,
-            max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
-            ..Default::default()
-        };
         adapter
-            .request_device(&wgpu::DeviceDescriptor {
-                label: Some("dirt"),
-                required_features: adapter.features() & wgpu::Features::PASSTHROUGH_SHADERS,
-                required_limits: limits,
-                ..Default::default()
-            })
+            .request_device(&device_descriptor(&adapter, "dirt"))
             .await
             .map_err(|e| GpuError::Device(e.to_string()))
     }

@@ -50,7 +50,7 @@ pub mod trace;
 pub mod tracer;
 pub mod views;
 
-pub use context::{Gpu, GpuOptions, HostSyncs, exact_path};
+pub use context::{Gpu, GpuOptions, HostSyncs, device_descriptor, exact_path};
 pub use frame::BuildFeedback;
 pub use gather::GpuMesh;
 pub use params::{

@@ -5,7 +5,6 @@
 
 use std::sync::Arc;
 
-use dirt_core::BindingLimits;
 use winit::window::Window;
 
 use crate::ViewError;
@@ -80,23 +79,10 @@ impl Device {
                 }),
             )
             .map_err(|e| ViewError::NoGpu(e.to_string()))?;
-        let supported = adapter.limits();
-        let limits = wgpu::Limits {
-            max_storage_buffer_binding_size: supported.max_storage_buffer_binding_size,
-            max_storage_buffers_per_shader_stage: supported
-                .max_storage_buffers_per_shader_stage
-                .min(BindingLimits::MAX_STORAGE_BUFFERS)
-                .max(wgpu::Limits::default().max_storage_buffers_per_shader_stage),
-            max_buffer_size: supported.max_buffer_size,
-            max_compute_workgroups_per_dimension: supported.max_compute_workgroups_per_dimension,
-            ..Default::default()
-        };
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("dirt view"),
-            required_features: adapter.features() & wgpu::Features::PASSTHROUGH_SHADERS,
-            required_limits: limits,
-            ..Default::default()
-        }))
+        // The device dirt-gpu asks for, so the exact path and the limits are the library's.
+        let (device, queue) = pollster::block_on(
+            adapter.request_device(&dirt_gpu::device_descriptor(&adapter, "dirt view")),
+        )
         .map_err(|e| ViewError::NoGpu(format!("cannot open a device: {e}")))?;
         Ok(Self {
             instance,
