@@ -337,7 +337,7 @@ impl Tracer for Grid {
     }
 
     fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         self.rebuild(tris)?;
         Ok(BuildReport {
             stages: vec![("grid", start.elapsed())],

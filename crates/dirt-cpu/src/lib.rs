@@ -40,7 +40,8 @@ use dirt_math::ViewSet;
 use dirt_math::dda::hiz_width;
 use dirt_math::encode::ordered_to_f32;
 use std::fmt;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 impl From<CpuError> for CoreError {
     fn from(e: CpuError) -> Self {

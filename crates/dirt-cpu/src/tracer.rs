@@ -7,7 +7,7 @@ use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
     Triangle, check_lengths,
 };
-use std::time::Instant;
+use web_time::Instant;
 
 /// Rays in the sample [`DirtCpu::auto`] measures candidates with.
 pub const AUTO_SAMPLE: usize = 512;

@@ -65,7 +65,7 @@ pub use wgpu;
 use dirt_core::{AdsParams, BuildTimings, CoreError, IdLists};
 use dirt_math::dda::{hiz_levels, hiz_width};
 use dirt_math::{Triangle, ViewGpu, ViewSet};
-use std::time::Instant;
+use web_time::Instant;
 
 /// Errors of the GPU backend.
 #[derive(Debug, thiserror::Error)]

@@ -12,7 +12,8 @@
 //!   the pinned CI device, llvmpipe (`docs/ARCHITECTURE.md`, "The GPU backend
 //!   and the bit-exact contract"); elsewhere such a test is skipped.
 //!
-//! Both open the GPU once per process and share it. A test that is skipped
+//! Both open the GPU once per process and share it (natively: in a browser a
+//! page opens its GPU asynchronously, and its tests open their own). A test that is skipped
 //! prints one line to stderr naming the test, the adapter and the reason. With
 //! `DIRT_REQUIRE_GPU=1` (set by CI) every skip of either kind is a panic with
 //! that reason instead, so a CI run cannot pass without running its GPU tests.
@@ -36,7 +37,7 @@
 use crate::Gpu;
 use std::collections::HashSet;
 use std::fmt;
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 
 /// The environment variable that turns every skipped GPU test into a failure
 /// when it is `1` (CI sets it).
@@ -166,9 +167,11 @@ pub fn check(test: &str, need: Need, adapter: Result<&AdapterFacts, &str>) -> bo
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// The GPU shared by this process's tests, opened on first use, with its facts;
 /// or why there is none. A panic inside the driver stack counts as no adapter.
 fn shared() -> Result<&'static (Gpu, AdapterFacts), &'static str> {
+    use std::sync::OnceLock;
     static GPU: OnceLock<Result<(Gpu, AdapterFacts), String>> = OnceLock::new();
     GPU.get_or_init(|| {
         Gpu::open().map(|gpu| {
@@ -180,6 +183,7 @@ fn shared() -> Result<&'static (Gpu, AdapterFacts), &'static str> {
     .map_err(String::as_str)
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn acquire(test: &str, need: Need) -> Option<&'static Gpu> {
     let gpu = shared();
     if check(test, need, gpu.map(|(_, facts)| facts)) {
@@ -189,6 +193,7 @@ fn acquire(test: &str, need: Need) -> Option<&'static Gpu> {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// The shared GPU for test `test` of structure, sizes, errors, limits,
 /// fallbacks or the absence of panics: runs on any adapter, hardware included.
 /// `None` (said on stderr) when there is no adapter; a panic instead under
@@ -197,6 +202,7 @@ pub fn any_gpu(test: &str) -> Option<&'static Gpu> {
     acquire(test, Need::Any)
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// The shared GPU for test `test` comparing with the CPU bit for bit: only on
 /// the exact path of the pinned CI device (llvmpipe with [`Gpu::exact`]).
 /// `None` (said on stderr, naming the adapter and the reason) elsewhere; a

@@ -128,7 +128,7 @@ impl<'g> DirtGpu<'g> {
                 layout: dirt_core::gather::MeshLayout::triangles(*count),
             })
             .collect();
-        let t0 = std::time::Instant::now();
+        let t0 = web_time::Instant::now();
         // A build whose lists outgrew the ids grows them for the next: at most one more.
         for _ in 0..3 {
             let mut enc = gpu.device.create_command_encoder(&Default::default());

@@ -167,6 +167,16 @@ pub fn load_animated(path: &Path) -> Result<AnimatedScene, SceneError> {
     crate::catch_panics(path, || crate::gltf_loader::load_gltf_animated(path))
 }
 
+/// [`load_animated`] from a glTF's bytes in memory (a `.glb`, or a `.gltf`
+/// whose buffers and images are `data:` URIs), as a web page gets a dropped
+/// file: nothing is read from disk, and an external URI is an error.
+/// `name` names the scene and stands for the path in errors.
+pub fn load_animated_bytes(name: &str, bytes: Vec<u8>) -> Result<AnimatedScene, SceneError> {
+    crate::catch_panics(Path::new(name), || {
+        crate::gltf_loader::load_gltf_bytes(name, bytes, true)
+    })
+}
+
 /// A node's property a channel drives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Property {

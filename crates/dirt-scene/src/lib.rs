@@ -120,7 +120,7 @@ mod obj_loader;
 
 use std::path::Path;
 
-pub use animation::{AnimatedScene, ClipInfo, load_animated, open_animated};
+pub use animation::{AnimatedScene, ClipInfo, load_animated, load_animated_bytes, open_animated};
 pub use builtin::{BUILTIN_NAMES, DEFAULT_SCENE, builtin, builtin_scaled};
 pub use dirt_math::{Aabb, Triangle, Vec3};
 pub use error::SceneError;
@@ -320,6 +320,17 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         }
     };
     catch_panics(path, || loader(path))
+}
+
+/// A glTF 2.0 scene from its bytes in memory (a `.glb`, or a `.gltf` whose
+/// buffers and images are `data:` URIs), as a web page gets a dropped file:
+/// nothing is read from disk, and an external URI is
+/// [`SceneError::BadResource`]. `name` names the scene and stands for the
+/// path in errors. Never panics (as [`load`]).
+pub fn load_gltf_bytes(name: &str, bytes: Vec<u8>) -> Result<Scene, SceneError> {
+    catch_panics(Path::new(name), || {
+        gltf_loader::load_gltf_bytes(name, bytes, false).map(|a| a.scene)
+    })
 }
 
 /// Runs a loader, turning a panic inside it (a bug, here or in a

@@ -233,6 +233,53 @@ fn flattened_order_glb() {
     check_order_scene(&load_no_panic(&path).unwrap());
 }
 
+/// The same documents from bytes in memory, as a web page hands a dropped
+/// file: a GLB and a `.gltf` with data URIs load as from disk; an external
+/// URI, which bytes cannot reach, is a named error; garbage is an error.
+#[test]
+fn scenes_from_bytes_in_memory() {
+    let (buf, json) = order_doc();
+    let from_glb =
+        dirt_scene::load_gltf_bytes("order.glb", glb(&json.replace("@BUFFER@", ""), &buf))
+            .expect("a GLB from bytes");
+    assert_eq!(from_glb.name, "order");
+    check_order_scene(&from_glb);
+    let with_uri = json.replace("@BUFFER@", &format!("\"uri\": \"{}\", ", data_uri(&buf)));
+    let from_json = dirt_scene::load_gltf_bytes("order.gltf", with_uri.clone().into_bytes())
+        .expect("a .gltf with data URIs from bytes");
+    check_order_scene(&from_json);
+    // The same scene as from a file, triangle for triangle.
+    let dir = tempfile::tempdir().unwrap();
+    let from_file = load_no_panic(&write(dir.path(), "order.gltf", &with_uri)).unwrap();
+    assert_eq!(from_json.triangles, from_file.triangles);
+    let animated =
+        dirt_scene::load_animated_bytes("order.gltf", with_uri.into_bytes()).expect("animated");
+    assert!(!animated.is_animated());
+    assert_eq!(animated.scene.triangles, from_file.triangles);
+
+    let external = json.replace("@BUFFER@", "\"uri\": \"order.bin\", ");
+    match dirt_scene::load_gltf_bytes("order.gltf", external.into_bytes()) {
+        Err(SceneError::BadResource {
+            path,
+            what,
+            problem,
+        }) => {
+            assert_eq!(path, PathBuf::from("order.gltf"));
+            assert!(what.contains("buffer 0"), "{what}");
+            assert!(problem.contains("from bytes"), "{problem}");
+        }
+        other => panic!("expected BadResource, got {:?}", other.map(|s| s.name)),
+    }
+    for garbage in [
+        &b""[..],
+        b"glTF\x02\x00\x00\x00",
+        b"{ not json",
+        &[0xff; 64],
+    ] {
+        assert!(dirt_scene::load_gltf_bytes("x.glb", garbage.to_vec()).is_err());
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Small one-primitive documents for the error cases.
 

@@ -54,6 +54,28 @@ pub(crate) fn load_gltf_animated(path: &Path) -> Result<AnimatedScene, SceneErro
 
 fn load(path: &Path, animated: bool) -> Result<AnimatedScene, SceneError> {
     let bytes = read_file(path)?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    from_bytes(path, bytes, Some(base), animated)
+}
+
+/// A glTF (GLB, or JSON with `data:` URIs) from bytes in memory; `name` stands
+/// for the path in the scene's name and errors. Nothing is read from disk.
+pub(crate) fn load_gltf_bytes(
+    name: &str,
+    bytes: Vec<u8>,
+    animated: bool,
+) -> Result<AnimatedScene, SceneError> {
+    from_bytes(Path::new(name), bytes, None, animated)
+}
+
+/// The loader over a file's bytes: `base` is the folder external URIs are
+/// resolved against, `None` when there is none (bytes in memory).
+fn from_bytes(
+    path: &Path,
+    bytes: Vec<u8>,
+    base: Option<&Path>,
+    animated: bool,
+) -> Result<AnimatedScene, SceneError> {
     let gltf_err = |source| SceneError::Gltf {
         path: path.to_path_buf(),
         source,
@@ -61,12 +83,11 @@ fn load(path: &Path, animated: bool) -> Result<AnimatedScene, SceneError> {
     let mut warnings = Vec::new();
     let (document, blob) = parse(path, &bytes, &mut warnings)?;
     drop(bytes);
-    let base = path.parent().unwrap_or(Path::new(""));
 
     check_external(path, base, &document)?;
-    let buffers = gltf::import_buffers(&document, Some(base), blob).map_err(gltf_err)?;
+    let buffers = gltf::import_buffers(&document, base, blob).map_err(gltf_err)?;
     check_views(path, &document)?;
-    let images = gltf::import_images(&document, Some(base), &buffers).map_err(gltf_err)?;
+    let images = gltf::import_images(&document, base, &buffers).map_err(gltf_err)?;
 
     let mut ctx = Ctx {
         path,

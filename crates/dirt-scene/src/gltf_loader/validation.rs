@@ -169,7 +169,7 @@ fn gltf1_version(bytes: &[u8]) -> Option<String> {
 /// must percent-decode to UTF-8 (`gltf` would panic otherwise) and exist.
 pub(super) fn check_external(
     path: &Path,
-    base: &Path,
+    base: Option<&Path>,
     doc: &gltf::Document,
 ) -> Result<(), SceneError> {
     let bad = |what: String, problem: String| SceneError::BadResource {
@@ -193,6 +193,12 @@ pub(super) fn check_external(
         if uri.starts_with("data:") {
             continue;
         }
+        let Some(base) = base else {
+            return Err(bad(
+                what,
+                "an external resource, which a scene read from bytes cannot reach (pack it into a .glb or a data: URI)".into(),
+            ));
+        };
         let resolved: PathBuf = if let Some(rest) = uri
             .strip_prefix("file://")
             .or_else(|| uri.strip_prefix("file:"))
