@@ -34,7 +34,7 @@
 //!
 //! For [`Layers::Nearest`], `fragments` keeps per pixel only the nearest
 //! fragment (smaller depth, then smaller id): a depth buffer and an id
-//! buffer; `reorder` has nothing to do.
+//! buffer; `reorder` has nothing to do but the Hi-Z pyramid (below).
 //!
 //! **Trace** (004 §3.4). For each view the ray is clipped to the frustum and
 //! the pixels it crosses are walked in order with the tile walk of DIRT's
@@ -48,6 +48,16 @@
 //! ends the view. Across views the closest hit wins ([`Hit::closer_than`]).
 //! Buckets only skip work: the hits do not depend on `B`.
 //!
+//! **Hi-Z** ([`ScreenSpaceParams::hiz`], on by default for the single layer:
+//! "one depth buffer + its Hi-Z, traced with a thickness", as screen-space
+//! reflection tracers do). The build adds a min/max depth pyramid over the
+//! per-pixel depth bounds (stage `reorder`), and each view is marched
+//! hierarchically: cells whose depth bounds (widened by the thickness) the
+//! ray's depth span over the cell cannot overlap are skipped whole. The hits
+//! are those of the linear march, bit for bit ([`hiz`] says how the order is
+//! kept). It works for [`Layers::All`] too, over the pixels' `[zmin, zmax]`
+//! (off by default there: MMRT marches linearly).
+//!
 //! **Reported hits.** `prim` is the fragment's primitive; `t` is where the
 //! ray's view depth equals the fragment's (`(z_f − o_z)/d_z`), clamped into
 //! the ray's interval over the pixel and `[tmin, tmax]` (the interval's
@@ -56,6 +66,8 @@
 //! [`dirt_math::triangle::intersect`]) of `origin + t·dir` projected onto the
 //! triangle's plane and clamped into the triangle. They approximate the true
 //! hit; how far they are from it is what the evaluation measures.
+
+pub mod hiz;
 
 use std::time::{Duration, Instant};
 
@@ -120,8 +132,15 @@ pub struct ScreenSpaceParams {
     /// bounds' diagonal (converted to view depth units at build).
     pub thickness: f32,
     /// Most pixels marched per view and ray; 0 = unbounded. A ray that runs
-    /// out reports what it found so far.
+    /// out reports what it found so far. A bounded march is always linear
+    /// (with [`ScreenSpaceParams::hiz`] too), so the bound means the same
+    /// pixels, in the same order.
     pub max_steps: u32,
+    /// Trace through a Hi-Z (min/max depth) pyramid over the depth bounds
+    /// instead of marching every pixel: the same hits bit for bit, more
+    /// memory ([`ScreenSpace::memory_bytes`]), less time on rays that cross
+    /// empty or far-off regions. True for the single layer, false for MMRT.
+    pub hiz: bool,
 }
 
 impl ScreenSpaceParams {
@@ -134,11 +153,12 @@ impl ScreenSpaceParams {
             buckets,
             thickness,
             max_steps: 0,
+            hiz: false,
         }
     }
 
     /// The single-layer tracer: one view from `eye`, the nearest layer, one
-    /// bucket, unbounded march.
+    /// bucket, unbounded march through the Hi-Z pyramid.
     pub fn single_layer(eye: Vec3, resolution: u32, thickness: f32) -> Self {
         Self {
             placement: Placement::Camera(eye),
@@ -147,6 +167,7 @@ impl ScreenSpaceParams {
             buckets: 1,
             thickness,
             max_steps: 0,
+            hiz: true,
         }
     }
 
@@ -192,7 +213,9 @@ impl ScreenSpaceParams {
 
     /// A short label with the knobs, e.g. `mmrt r128 B8 th1e-2`,
     /// `1-layer r128 th1e-2`, with ` steps64` when the march is bounded and
-    /// ` camera` / ` cube` when the placement is not the method's own.
+    /// ` camera` / ` cube` when the placement is not the method's own, and
+    /// ` linear` / ` hiz` at the end when the march is not the method's own
+    /// (a single layer without its Hi-Z, MMRT with one).
     pub fn label(&self) -> String {
         let mut s = self.name().to_string();
         match (self.layers, self.placement) {
@@ -207,6 +230,11 @@ impl ScreenSpaceParams {
         s.push_str(&format!(" th{:e}", self.thickness));
         if self.max_steps > 0 {
             s.push_str(&format!(" steps{}", self.max_steps));
+        }
+        match (self.layers, self.hiz) {
+            (Layers::Nearest, false) => s.push_str(" linear"),
+            (Layers::All, true) => s.push_str(" hiz"),
+            _ => {}
         }
         s
     }
@@ -235,6 +263,9 @@ struct ViewStore {
     /// [`Layers::All`]: the id buffer, by pixel, bucket and depth.
     /// [`Layers::Nearest`]: one per pixel ([`NO_FRAG`] when empty).
     frags: Vec<Frag>,
+    /// With [`ScreenSpaceParams::hiz`]: levels `1..` of the Hi-Z pyramid
+    /// (level 0 is `bounds`, or the depths of `frags`).
+    hiz: Vec<hiz::Level>,
 }
 
 /// An approximate screen-space tracer (module docs): MMRT or the single layer.
@@ -285,10 +316,15 @@ impl ScreenSpace {
     /// Bytes of what the last build stores: for [`Layers::All`] the depth
     /// bounds (8 B per pixel), the bucket heads (4 B per pixel and bucket,
     /// plus one) and the id buffer (8 B per fragment: depth and id); for
-    /// [`Layers::Nearest`] a depth and an id buffer (8 B per pixel).
+    /// [`Layers::Nearest`] a depth and an id buffer (8 B per pixel); with
+    /// [`ScreenSpaceParams::hiz`] also the pyramid's levels above the pixels
+    /// (8 B per cell: min and max; about a third of a pixel each).
     pub fn memory_bytes(&self) -> u64 {
         let size = |s: &ViewStore| {
-            8 * s.bounds.len() as u64 + 4 * s.heads.len() as u64 + 8 * s.frags.len() as u64
+            8 * s.bounds.len() as u64
+                + 4 * s.heads.len() as u64
+                + 8 * s.frags.len() as u64
+                + s.hiz.iter().map(|l| 8 * l.cells.len() as u64).sum::<u64>()
         };
         self.stores.iter().map(size).sum()
     }
@@ -302,6 +338,8 @@ impl ScreenSpace {
     /// can see the scene; 004 also counts its camera view `j = 0`, which is
     /// not built here).
     /// For [`Layers::Nearest`]: a depth and an id buffer, `V·r²·8`.
+    /// Neither counts a Hi-Z pyramid: 004's model has none (see
+    /// [`ScreenSpace::memory_bytes`] for what this build stores).
     pub fn model_bytes(&self) -> u64 {
         let px = self.pixels();
         match self.params.layers {
@@ -383,6 +421,19 @@ impl ScreenSpace {
                     .count();
                 let t1 = Instant::now();
                 self.stores = stores;
+                if p.hiz {
+                    self.stores.par_iter_mut().for_each(|s| {
+                        let frags = &s.frags;
+                        s.hiz = hiz::pyramid(p.resolution, |k| {
+                            let f = frags[k];
+                            if f.prim == INVALID_ID {
+                                [f32::INFINITY, f32::NEG_INFINITY]
+                            } else {
+                                [f.z, f.z]
+                            }
+                        });
+                    });
+                }
                 self.install(tris);
                 return Ok([t1 - t0, Instant::now() - t1]);
             }
@@ -459,11 +510,17 @@ impl ScreenSpace {
                     debug_assert_eq!(k, e);
                 }
                 heads.push(frags.len() as u32);
+                let hiz = if p.hiz {
+                    hiz::pyramid(p.resolution, |k| zb[k])
+                } else {
+                    Vec::new()
+                };
                 ViewStore {
                     view: Some(v),
                     bounds: zb,
                     heads,
                     frags,
+                    hiz,
                 }
             })
             .collect();
@@ -491,7 +548,12 @@ impl ScreenSpace {
             if iv.is_empty() || iv.t0 > best.t {
                 continue;
             }
-            if let Some(h) = self.march(s, v, &vr, iv, ray, best.t)
+            let h = if self.params.hiz && self.params.max_steps == 0 {
+                self.march_hiz(s, v, &vr, iv, ray, best.t)
+            } else {
+                self.march(s, v, &vr, iv, ray, best.t)
+            };
+            if let Some(h) = h
                 && h.closer_than(&best)
             {
                 best = h;

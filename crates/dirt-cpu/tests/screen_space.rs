@@ -398,8 +398,32 @@ fn memory_matches_what_is_stored_and_table_2() {
     .expect("new");
     let report = one.build(&tris).expect("build");
     assert_eq!(one.name(), "1-layer");
-    assert_eq!(report.memory, Some(16 * 16 * 8));
+    // Plus its Hi-Z above the pixels: 8² + 4² + 2² + 1 cells of 8 B; 004's
+    // model has no pyramid.
+    assert_eq!(report.memory, Some(16 * 16 * 8 + (64 + 16 + 4 + 1) * 8));
     assert_eq!(one.model_bytes(), 16 * 16 * 8);
+    let linear = built(
+        ScreenSpaceParams {
+            hiz: false,
+            ..*one.params()
+        },
+        &tris,
+    );
+    assert_eq!(linear.memory_bytes(), 16 * 16 * 8);
+    assert_eq!(linear.model_bytes(), 16 * 16 * 8);
+    // MMRT with a pyramid: the same, over the cube's six views.
+    let mmrt_hiz = built(
+        ScreenSpaceParams {
+            hiz: true,
+            ..ScreenSpaceParams::mmrt(16, 4, DEFAULT_THICKNESS)
+        },
+        &tris,
+    );
+    assert_eq!(
+        mmrt_hiz.memory_bytes(),
+        s.memory_bytes() + 6 * (64 + 16 + 4 + 1) * 8
+    );
+    assert_eq!(mmrt_hiz.model_bytes(), s.model_bytes());
     // The wall at z = 1 (depth 1.5, where the view spans [-1.5, 1.5]²) covers
     // x >= -1, y >= -1, x + y <= 2. Pixel centres lie at -1.5 + 0.1875·(i + 0.5):
     // columns and rows 3..=15 have x, y >= -1 (169 pixels), of which the 15
@@ -418,6 +442,12 @@ fn labels_and_params() {
     assert_eq!(s.label(), "1-layer r128 th1e-2");
     assert_eq!(s.layers, Layers::Nearest);
     assert_eq!(s.buckets, 1);
+    assert!(s.hiz && !m.hiz);
+    let s_linear = ScreenSpaceParams { hiz: false, ..s };
+    assert_eq!(s_linear.label(), "1-layer r128 th1e-2 linear");
+    let m_hiz = ScreenSpaceParams { hiz: true, ..m };
+    assert_eq!(m_hiz.label(), "mmrt r128 B8 th1e-2 hiz");
+    assert!(s_linear.validate().is_ok() && m_hiz.validate().is_ok());
     assert!(m.validate().is_ok() && s.validate().is_ok());
 }
 
@@ -571,4 +601,112 @@ fn rays_from_the_cube_centre_work() {
         assert_eq!(truth.prim, prim);
         assert!((h.t - truth.t).abs() < 0.01, "{h:?} vs {truth:?}");
     }
+}
+
+/// Hits of the Hi-Z march and of the linear march (the same params with
+/// `hiz` off), compared bit for bit; returns how many rays hit.
+fn hiz_equals_linear(p: ScreenSpaceParams, tris: &[Triangle], rays: &[Ray]) -> usize {
+    let mut fast = built(ScreenSpaceParams { hiz: true, ..p }, tris);
+    let mut slow = built(ScreenSpaceParams { hiz: false, ..p }, tris);
+    assert_eq!(fast.fragments(), slow.fragments());
+    let a = fast.trace(rays).expect("trace");
+    let b = slow.trace(rays).expect("trace");
+    for (k, (h, l)) in a.iter().zip(&b).enumerate() {
+        assert_eq!(
+            h.bits(),
+            l.bits(),
+            "{}: ray {k} {:?}: hiz {h:?} vs linear {l:?}",
+            p.label(),
+            rays[k]
+        );
+    }
+    a.iter().filter(|h| h.is_hit()).count()
+}
+
+/// The Hi-Z single layer's hits are the linear march's, bit for bit: random
+/// scenes and rays (from inside and far outside, grazing, short segments,
+/// invalid ones), several seeds, resolutions (1, odd, non-powers of two),
+/// thicknesses and eyes (inside and outside the scene's bounds); and the same
+/// for the pyramid over the cube's views (several views: the bound of an
+/// earlier view's hit matters) and over MMRT's A-buffer.
+#[test]
+fn hiz_hits_equal_the_linear_march_bit_for_bit() {
+    let eyes = [
+        v(0.0, 0.2, -2.5),
+        v(0.1, -0.2, 0.3),
+        v(3.0, 2.0, 1.0),
+        v(-0.6, 0.5, -0.7),
+    ];
+    let mut rays_total = 0;
+    let mut hits_total = 0;
+    for seed in [1u64, 2, 3] {
+        let mut rng = Rng(0xd1e7 + seed);
+        let tris = scene(300, &mut rng);
+        let rays = rays(2000, &tris, &mut rng);
+        for (n, &eye) in eyes.iter().enumerate() {
+            let res = [100, 64, 37, 128][(n + seed as usize) % 4];
+            let th = [0.01, 0.0, 0.002, 0.05][(n + 2 * seed as usize) % 4];
+            let p = ScreenSpaceParams::single_layer(eye, res, th);
+            hits_total += hiz_equals_linear(p, &tris, &rays);
+            rays_total += rays.len();
+        }
+        let r = rays.len() / 4;
+        for res in [1, 2, 3, 5, 100] {
+            let p = ScreenSpaceParams::single_layer(eyes[seed as usize], res, DEFAULT_THICKNESS);
+            hits_total += hiz_equals_linear(p, &tris, &rays[..r]);
+            rays_total += r;
+        }
+        // One layer over the cube's views, and MMRT's A-buffer.
+        let cube = ScreenSpaceParams {
+            placement: Placement::Cube,
+            ..ScreenSpaceParams::single_layer(Vec3::ZERO, 100, DEFAULT_THICKNESS)
+        };
+        hits_total += hiz_equals_linear(cube, &tris, &rays);
+        rays_total += rays.len();
+        let mmrt = ScreenSpaceParams::mmrt(100, 4, 0.005);
+        hits_total += hiz_equals_linear(mmrt, &tris, &rays[..r]);
+        rays_total += r;
+        // A bounded march is linear either way.
+        let bounded = ScreenSpaceParams {
+            max_steps: 5,
+            ..ScreenSpaceParams::single_layer(eyes[0], 64, DEFAULT_THICKNESS)
+        };
+        hits_total += hiz_equals_linear(bounded, &tris, &rays[..r]);
+        rays_total += r;
+    }
+    println!("{hits_total} hits of {rays_total} rays, the same bits");
+    assert!(rays_total >= 2000);
+    // Enough hits that the comparison says something.
+    assert!(hits_total > rays_total / 10, "{hits_total} of {rays_total}");
+}
+
+/// Many short segments and rays aimed at triangles from near the camera
+/// (reflection-like rays: most hit something after a few pixels), on a
+/// denser scene.
+#[test]
+fn hiz_equals_linear_on_rays_aimed_at_the_scene() {
+    let mut rng = Rng(0xabc);
+    let tris = scene(1500, &mut rng);
+    let eye = v(0.0, 0.3, -2.2);
+    let mut rays = Vec::new();
+    for k in 0..3000 {
+        let o = if k % 2 == 0 {
+            eye + rng.v(0.3)
+        } else {
+            rng.v(0.9)
+        };
+        let t = tris[rng.below(tris.len())];
+        let target = t.vertex(0) * 0.4 + t.vertex(1) * 0.3 + t.vertex(2) * 0.3;
+        let tmax = if k % 3 == 0 {
+            rng.f() * 3.0
+        } else {
+            f32::INFINITY
+        };
+        rays.push(Ray::new(o, target - o + rng.v(0.05), 0.0, tmax));
+    }
+    let mut hits = 0;
+    for (res, th) in [(100, 0.01), (256, 0.003), (61, 0.02)] {
+        hits += hiz_equals_linear(ScreenSpaceParams::single_layer(eye, res, th), &tris, &rays);
+    }
+    assert!(hits > rays.len(), "{hits}");
 }
