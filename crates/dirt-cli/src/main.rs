@@ -128,7 +128,7 @@ mod tests {
         };
         assert_eq!(args.scene.scene, dirt_scene::DEFAULT_SCENE);
         assert_eq!(args.backend, Backend::Cpu);
-        assert_eq!(args.traversal, Traversal::default());
+        assert_eq!(args.traversal, None);
     }
 
     #[test]
@@ -161,7 +161,7 @@ mod tests {
             panic!("not trace")
         };
         assert_eq!(args.backend, Backend::Brute);
-        assert_eq!(args.traversal, Traversal::HiZ);
+        assert_eq!(args.traversal, Some(Traversal::HiZ));
         let p = args.ads.params();
         assert_eq!(p.views, ViewsKind::Single);
         assert_eq!((p.resolution, p.buckets, p.tile), (64, 4, 2));

@@ -280,7 +280,26 @@ fn cpu_hits_equal_brute_force_hits_byte_for_byte() {
         "single-layer",
     ]);
     assert!(log.contains("approximate"), "{log}");
-    assert_eq!(prims(&fs::read(&out).expect("hits")).len(), truth.len());
+    let layer = fs::read(&out).expect("hits");
+    assert_eq!(prims(&layer).len(), truth.len());
+    // Its default walk is the depth buffer's Hi-Z: every pixel gives the same bytes.
+    let linear = dir.path("layer_linear.npy");
+    dirt_ok(&[
+        "trace",
+        SCENE,
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&linear),
+        "--backend",
+        "single-layer",
+        "--traversal",
+        "linear",
+    ]);
+    assert!(
+        fs::read(&linear).expect("hits") == layer,
+        "hiz and linear differ"
+    );
     let e = dirt_err(&[
         "trace",
         SCENE,

@@ -9,8 +9,9 @@
 //!
 //! Both are `dirt_cpu::screen_space::ScreenSpace` tracers. [`sweep`] moves
 //! one knob at a time around each method's default (resolution, B,
-//! thickness, steps per view), so each knob's effect on error and time can
-//! be read off its own rows.
+//! thickness, steps per view, and the walk: every pixel or a min/max depth
+//! pyramid, which gives the same hits), so each knob's effect on error and
+//! time can be read off its own rows.
 
 use dirt_cpu::screen_space::{DEFAULT_THICKNESS, ScreenSpaceParams};
 use dirt_math::Vec3;
@@ -48,6 +49,8 @@ pub struct ApproxPoint {
     pub thickness: f32,
     /// Most pixels marched per view (0: unbounded).
     pub max_steps: u32,
+    /// Walk a min/max depth pyramid instead of every pixel (same hits).
+    pub hiz: bool,
 }
 
 impl ApproxPoint {
@@ -59,10 +62,11 @@ impl ApproxPoint {
             buckets,
             thickness,
             max_steps: 0,
+            hiz: false,
         }
     }
 
-    /// One depth layer at the camera, unbounded steps.
+    /// One depth layer at the camera, unbounded steps, walked through its Hi-Z.
     pub const fn single_layer(resolution: u32, thickness: f32) -> ApproxPoint {
         ApproxPoint {
             method: Method::SingleLayer,
@@ -70,6 +74,7 @@ impl ApproxPoint {
             buckets: 1,
             thickness,
             max_steps: 0,
+            hiz: true,
         }
     }
 
@@ -91,6 +96,7 @@ impl ApproxPoint {
             }
         };
         p.max_steps = self.max_steps;
+        p.hiz = self.hiz;
         Some(p)
     }
 
@@ -107,6 +113,12 @@ impl ApproxPoint {
         label += &format!(" th{:.0e}", self.thickness);
         if self.max_steps > 0 {
             label += &format!(" steps{}", self.max_steps);
+        }
+        // The walk, where it is not the method's own: MMRT marches pixels, the single layer its Hi-Z.
+        match (self.method, self.hiz) {
+            (Method::Mmrt, true) => label += " hiz",
+            (Method::SingleLayer, false) => label += " linear",
+            _ => {}
         }
         Setting {
             label,
@@ -139,6 +151,7 @@ pub fn sweep() -> Vec<ApproxPoint> {
     for steps in [16, 64] {
         v.push(d.steps(steps));
     }
+    v.push(ApproxPoint { hiz: true, ..d });
     let s = SINGLE_LAYER_DEFAULT;
     v.push(s);
     for r in [64, 128, 512] {
@@ -148,6 +161,7 @@ pub fn sweep() -> Vec<ApproxPoint> {
         v.push(ApproxPoint { thickness: th, ..s });
     }
     v.push(s.steps(64));
+    v.push(ApproxPoint { hiz: false, ..s });
     v
 }
 
@@ -180,6 +194,12 @@ mod tests {
             "r256 th1e-2 steps64"
         );
         assert!(SINGLE_LAYER_DEFAULT.params(None).is_none());
+        let linear = ApproxPoint {
+            hiz: false,
+            ..SINGLE_LAYER_DEFAULT
+        };
+        assert_eq!(linear.setting().label, "r256 th1e-2 linear");
+        assert!(!linear.params(Some(Vec3::ONE)).expect("eye").hiz);
         let p = SINGLE_LAYER_DEFAULT
             .params(Some(Vec3::ONE))
             .expect("a camera");

@@ -33,9 +33,11 @@ pub struct TraceArgs {
     pub backend: TraceBackend,
     #[command(flatten)]
     pub ads: AdsArgs,
-    /// How the cpu and gpu backends walk the tiles a ray crosses.
-    #[arg(long, value_enum, default_value_t = Traversal::default())]
-    pub traversal: Traversal,
+    /// How the cpu and gpu backends walk the tiles a ray crosses [default: linear], and the
+    /// mmrt and single-layer backends their pixels [default: linear for mmrt, hiz for
+    /// single-layer; the same hits either way].
+    #[arg(long, value_enum)]
+    pub traversal: Option<Traversal>,
     /// Cells per triangle of the grid backend.
     #[arg(long, value_name = "RHO", default_value_t = dirt_cpu::grid::DEFAULT_DENSITY)]
     pub density: f32,
@@ -196,7 +198,11 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
                 let time = ads.timings.total();
                 eprintln!("build: the structure the cost model built while choosing is kept");
                 (
-                    Box::new(DirtCpu::from_ads(ads, tris, args.traversal)),
+                    Box::new(DirtCpu::from_ads(
+                        ads,
+                        tris,
+                        args.traversal.unwrap_or_default(),
+                    )),
                     built,
                     time,
                 )
@@ -207,8 +213,12 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
                         Some(peer) => peer,
                         None => Box::new(Brute::default()),
                     },
-                    (Some(p), Some(g)) => Box::new(DirtGpu::new(g, p, args.traversal)),
-                    (Some(p), None) => Box::new(DirtCpu::new(p, args.traversal)),
+                    (Some(p), Some(g)) => {
+                        Box::new(DirtGpu::new(g, p, args.traversal.unwrap_or_default()))
+                    }
+                    (Some(p), None) => {
+                        Box::new(DirtCpu::new(p, args.traversal.unwrap_or_default()))
+                    }
                 };
                 let start = Instant::now();
                 let built = tracer.build(tris).with_context(|| {
@@ -261,6 +271,9 @@ fn screen_space(
         ScreenSpaceParams::single_layer(eye, args.ads.resolution, args.thickness)
     };
     params.max_steps = args.steps;
+    if let Some(t) = args.traversal {
+        params.hiz = t == Traversal::HiZ;
+    }
     eprintln!(
         "{} is approximate: its hits may differ from brute force's ({})",
         args.backend,
