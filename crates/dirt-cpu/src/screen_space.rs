@@ -72,7 +72,7 @@ pub mod hiz;
 use std::time::{Duration, Instant};
 
 use dirt_core::{
-    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, check_lengths,
+    BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Triangle, trace_each,
 };
 use dirt_math::bucket::bucket_of;
 use dirt_math::clip::{Interval, clip_ray_to_view, clip_triangle_to_view, polygon_tile_range};
@@ -773,16 +773,12 @@ impl Tracer for ScreenSpace {
         hits: &mut [Hit],
         stats: Option<&mut [RayStats]>,
     ) -> Result<TraceReport, CoreError> {
-        check_lengths(rays, hits, stats.as_deref())?;
         if !self.built {
             return Err(CoreError::NotBuilt {
                 tracer: self.name(),
             });
         }
         let me = &*self;
-        rays.par_iter()
-            .zip(hits.par_iter_mut())
-            .for_each(|(r, h)| *h = me.trace_ray(r));
-        Ok(TraceReport::default())
+        trace_each(rays, hits, stats.as_deref(), |r| me.trace_ray(r))
     }
 }

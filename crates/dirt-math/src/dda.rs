@@ -48,9 +48,10 @@ pub fn dilation(v: &View, vr: &ViewRay, iv: &Interval) -> f32 {
     vr.eps / z / v.step + 1.0 / 256.0
 }
 
-/// Inclusive tile index range of the continuous coordinates `a`, `b`, dilated by `d`.
+/// Inclusive tile index range of the continuous coordinates `a`, `b`, dilated by `d`
+/// (how the walk picks its bands, and the tiles of a band).
 #[inline]
-fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
+pub fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
     let lo = fmin(a, b) - d;
     let hi = fmax(a, b) + d;
     if !(hi >= 0.0 && lo < tiles as f32) {
@@ -58,6 +59,87 @@ fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
     }
     let last = tiles - 1;
     Some((floor_index(lo, last), floor_index(hi, last)))
+}
+
+/// `iv` clipped to slab `k` of `axis` (slopes between tile boundaries `k`
+/// and `k + 1`): how the walk cuts a band of tiles, and a tile of a band.
+#[inline]
+pub fn clip_to_slab(v: &View, vr: &ViewRay, iv: Interval, axis: usize, k: u32) -> Interval {
+    let mut slab = iv;
+    slab.clip(
+        &HalfSpace::Lo {
+            axis,
+            s: v.boundary(k),
+        },
+        vr,
+    );
+    slab.clip(
+        &HalfSpace::Hi {
+            axis,
+            s: v.boundary(k + 1),
+        },
+        vr,
+    );
+    slab
+}
+
+/// How [`walk_tiles`] orders the tiles a ray crosses within `iv`: bands of
+/// tiles cut across the `major` axis (the one the ray's projection moves
+/// most along), bands `k0..=k1` visited `forward` or backward, the tiles of
+/// a band `minor_forward` or backward, every range dilated by `delta`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WalkPlan {
+    pub major: usize,
+    pub forward: bool,
+    pub minor_forward: bool,
+    pub delta: f32,
+    pub k0: u32,
+    pub k1: u32,
+}
+
+impl WalkPlan {
+    /// The plan of the ray `vr` over `iv` (clipped to the view); `None`
+    /// when the walk visits no tile.
+    #[inline]
+    pub fn of(v: &View, vr: &ViewRay, iv: Interval) -> Option<WalkPlan> {
+        if iv.is_empty() || v.tiles == 0 {
+            return None;
+        }
+        let a = tile_xy(v, vr, iv.t0);
+        let b = tile_xy(v, vr, iv.t1);
+        let delta = dilation(v, vr, &iv);
+        let major = if (b[0] - a[0]).abs() >= (b[1] - a[1]).abs() {
+            0
+        } else {
+            1
+        };
+        let minor = 1 - major;
+        let (k0, k1) = index_range(a[major], b[major], delta, v.tiles)?;
+        Some(WalkPlan {
+            major,
+            forward: b[major] >= a[major],
+            minor_forward: b[minor] >= a[minor],
+            delta,
+            k0,
+            k1,
+        })
+    }
+
+    /// The axis the tiles of a band run along.
+    #[inline]
+    pub fn minor(&self) -> usize {
+        1 - self.major
+    }
+
+    /// The index of the `n`-th band the walk visits (`n <= k1 - k0`).
+    #[inline]
+    pub fn band(&self, n: u32) -> u32 {
+        if self.forward {
+            self.k0 + n
+        } else {
+            self.k1 - n
+        }
+    }
 }
 
 /// Calls `visit` for every tile of `v` the ray crosses within `iv` (already
@@ -72,40 +154,13 @@ pub fn walk_tiles(
     bound: &mut dyn FnMut() -> f32,
     visit: &mut dyn FnMut(TileSpan) -> Walk,
 ) {
-    if iv.is_empty() || v.tiles == 0 {
-        return;
-    }
-    let a = tile_xy(v, vr, iv.t0);
-    let b = tile_xy(v, vr, iv.t1);
-    let delta = dilation(v, vr, &iv);
-    let major = if (b[0] - a[0]).abs() >= (b[1] - a[1]).abs() {
-        0
-    } else {
-        1
-    };
-    let minor = 1 - major;
-    let Some((k0, k1)) = index_range(a[major], b[major], delta, v.tiles) else {
+    let Some(plan) = WalkPlan::of(v, vr, iv) else {
         return;
     };
-    let forward = b[major] >= a[major];
-    let minor_forward = b[minor] >= a[minor];
-    for n in 0..=(k1 - k0) {
-        let k = if forward { k0 + n } else { k1 - n };
-        let mut band = iv;
-        band.clip(
-            &HalfSpace::Lo {
-                axis: major,
-                s: v.boundary(k),
-            },
-            vr,
-        );
-        band.clip(
-            &HalfSpace::Hi {
-                axis: major,
-                s: v.boundary(k + 1),
-            },
-            vr,
-        );
+    let (major, minor) = (plan.major, plan.minor());
+    for n in 0..=(plan.k1 - plan.k0) {
+        let k = plan.band(n);
+        let band = clip_to_slab(v, vr, iv, major, k);
         if band.is_empty() {
             continue;
         }
@@ -114,26 +169,12 @@ pub fn walk_tiles(
         }
         let p = tile_xy(v, vr, band.t0);
         let q = tile_xy(v, vr, band.t1);
-        let Some((m0, m1)) = index_range(p[minor], q[minor], delta, v.tiles) else {
+        let Some((m0, m1)) = index_range(p[minor], q[minor], plan.delta, v.tiles) else {
             continue;
         };
         for e in 0..=(m1 - m0) {
-            let m = if minor_forward { m0 + e } else { m1 - e };
-            let mut span = band;
-            span.clip(
-                &HalfSpace::Lo {
-                    axis: minor,
-                    s: v.boundary(m),
-                },
-                vr,
-            );
-            span.clip(
-                &HalfSpace::Hi {
-                    axis: minor,
-                    s: v.boundary(m + 1),
-                },
-                vr,
-            );
+            let m = if plan.minor_forward { m0 + e } else { m1 - e };
+            let span = clip_to_slab(v, vr, band, minor, m);
             if span.is_empty() {
                 continue;
             }

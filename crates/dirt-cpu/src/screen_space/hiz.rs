@@ -49,13 +49,13 @@
 use super::{Layers, ScreenSpaceParams};
 use super::{ScreenSpace, ViewStore};
 use dirt_core::{Hit, Ray};
-use dirt_math::clip::{HalfSpace, Interval};
+use dirt_math::clip::Interval;
 #[cfg(doc)]
 use dirt_math::dda::walk_tiles;
 use dirt_math::dda::{
-    HiZCell, child_order, dilation, hiz_levels, hiz_width, projected_direction, tile_xy,
+    HiZCell, WalkPlan, child_order, clip_to_slab, hiz_levels, hiz_width, index_range,
+    projected_direction, tile_xy,
 };
-use dirt_math::num::{floor_index, fmax, fmin};
 use dirt_math::{View, ViewRay};
 
 /// One stored level (`>= 1`) of the pyramid: `w`² cells, row-major, `[min, max]`.
@@ -96,19 +96,6 @@ pub(super) fn pyramid(tiles: u32, level0: impl Fn(usize) -> [f32; 2]) -> Vec<Lev
         out.push(Level { w, cells });
     }
     out
-}
-
-/// Inclusive tile index range of the continuous coordinates `a`, `b`, dilated
-/// by `d`: `walk_tiles`' own, repeated so that the membership is the same.
-#[inline]
-fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
-    let lo = fmin(a, b) - d;
-    let hi = fmax(a, b) + d;
-    if !(hi >= 0.0 && lo < tiles as f32) {
-        return None;
-    }
-    let last = tiles - 1;
-    Some((floor_index(lo, last), floor_index(hi, last)))
 }
 
 /// The walk's order of one ray in one view: which axis the bands cut, and
@@ -154,21 +141,7 @@ type Band = (Interval, u32, u32);
 /// index range; `None` when the walk visits no pixel of that band.
 #[inline]
 fn band(v: &View, vr: &ViewRay, iv: Interval, major: usize, delta: f32, k: u32) -> Option<Band> {
-    let mut band = iv;
-    band.clip(
-        &HalfSpace::Lo {
-            axis: major,
-            s: v.boundary(k),
-        },
-        vr,
-    );
-    band.clip(
-        &HalfSpace::Hi {
-            axis: major,
-            s: v.boundary(k + 1),
-        },
-        vr,
-    );
+    let band = clip_to_slab(v, vr, iv, major, k);
     if band.is_empty() {
         return None;
     }
@@ -206,25 +179,15 @@ impl ScreenSpace {
         ray: &Ray,
         bound: f32,
     ) -> Option<Hit> {
-        // The walk's set-up, as `walk_tiles` does it.
-        if iv.is_empty() || v.tiles == 0 {
-            return None;
-        }
+        // The walk's plan: `walk_tiles`' own.
+        let plan = WalkPlan::of(v, vr, iv)?;
         let tiles = v.tiles;
-        let a = tile_xy(v, vr, iv.t0);
-        let b = tile_xy(v, vr, iv.t1);
-        let delta = dilation(v, vr, &iv);
-        let major = if (b[0] - a[0]).abs() >= (b[1] - a[1]).abs() {
-            0
-        } else {
-            1
-        };
-        let minor = 1 - major;
-        let (k0, k1) = index_range(a[major], b[major], delta, tiles)?;
+        let (major, minor, delta) = (plan.major, plan.minor(), plan.delta);
+        let (k0, k1) = (plan.k0, plan.k1);
         let order = Order {
             major,
-            forward: b[major] >= a[major],
-            minor_forward: b[minor] >= a[minor],
+            forward: plan.forward,
+            minor_forward: plan.minor_forward,
             tiles,
         };
         // The children in walk order: `child_order` gives the entered corner,
@@ -291,21 +254,7 @@ impl ScreenSpace {
                 if m < m0 || m > m1 {
                     continue;
                 }
-                let mut span = band_iv;
-                span.clip(
-                    &HalfSpace::Lo {
-                        axis: minor,
-                        s: v.boundary(m),
-                    },
-                    vr,
-                );
-                span.clip(
-                    &HalfSpace::Hi {
-                        axis: minor,
-                        s: v.boundary(m + 1),
-                    },
-                    vr,
-                );
+                let span = clip_to_slab(v, vr, band_iv, minor, m);
                 if span.is_empty() {
                     continue;
                 }
@@ -355,22 +304,8 @@ impl ScreenSpace {
         // finds nothing if that band comes before it (or is its own).
         if bound < f32::INFINITY {
             for n in 0..=(k1 - k0) {
-                let k = if order.forward { k0 + n } else { k1 - n };
-                let mut band = iv;
-                band.clip(
-                    &HalfSpace::Lo {
-                        axis: major,
-                        s: v.boundary(k),
-                    },
-                    vr,
-                );
-                band.clip(
-                    &HalfSpace::Hi {
-                        axis: major,
-                        s: v.boundary(k + 1),
-                    },
-                    vr,
-                );
+                let k = plan.band(n);
+                let band = clip_to_slab(v, vr, iv, major, k);
                 if !band.is_empty() && band.t0 > bound {
                     return None;
                 }
