@@ -55,6 +55,19 @@ impl Err {
         100.0 * self.prim as f64 / self.compared.max(1) as f64
     }
 
+    /// The table cells `prim % | other % | missed % | false % | t rel. mean | t rel. max`.
+    fn cells(&self) -> String {
+        format!(
+            "{} | {} | {} | {} | {} | {}",
+            pct(self.prim_pct()),
+            self.pct(self.other),
+            self.pct(self.missed),
+            self.pct(self.false_hits),
+            self.t_mean(),
+            sci(self.t_max)
+        )
+    }
+
     fn t_mean(&self) -> String {
         if self.both > 0.0 {
             sci(self.t_sum / self.both)
@@ -123,7 +136,7 @@ fn settings_table(s: &mut String, res: &EvalResults) {
         let trace: f64 = rows.iter().map(|r| r.trace_ms).sum();
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} ({}) | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} ({}) | {} |",
             b.scene,
             b.backend,
             b.setting,
@@ -133,12 +146,7 @@ fn settings_table(s: &mut String, res: &EvalResults) {
             b.id_buffer_bytes
                 .map_or_else(|| "–".into(), |x| mib(x as f64)),
             b.id_buffer_model_bytes.map_or_else(|| "–".into(), mib),
-            pct(e.prim_pct()),
-            e.pct(e.other),
-            e.pct(e.missed),
-            e.pct(e.false_hits),
-            e.t_mean(),
-            sci(e.t_max),
+            e.cells(),
         );
     }
     let _ = writeln!(s);
@@ -182,16 +190,11 @@ fn per_ray_type_table(s: &mut String, res: &EvalResults) {
         let e = Err::of([t]);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} |",
             t.scene,
             t.ray_type,
             t.backend,
-            pct(e.prim_pct()),
-            e.pct(e.other),
-            e.pct(e.missed),
-            e.pct(e.false_hits),
-            e.t_mean(),
-            sci(e.t_max),
+            e.cells(),
         );
     }
     let _ = writeln!(s);
