@@ -31,7 +31,9 @@ fn bucket_of(z: f32, zmin: f32, zmax: f32, buckets: u32) -> u32 {
 
 fn bucket_floor_depth(k: u32, zmin: f32, zmax: f32, buckets: u32) -> f32 {
     if k == 0u || buckets <= 1u {
-        return bitcast<f32>(0xff800000u);
+        // From a `let`: a constant -inf is refused by Tint (see f32_inf).
+        let bits = 0xff800000u;
+        return bitcast<f32>(bits);
     }
     let range = zmax - zmin;
     return zmin + range * div_cr(f32(k), f32(buckets)) - range * 0.0009765625;
@@ -39,7 +41,8 @@ fn bucket_floor_depth(k: u32, zmin: f32, zmax: f32, buckets: u32) -> f32 {
 
 fn bucket_ceil_depth(k: u32, zmin: f32, zmax: f32, buckets: u32) -> f32 {
     if k + 1u >= buckets {
-        return bitcast<f32>(0x7f800000u);
+        let bits = 0x7f800000u;
+        return bitcast<f32>(bits);
     }
     let range = zmax - zmin;
     return zmin + range * div_cr(f32(k + 1u), f32(buckets)) + range * 0.0009765625;

@@ -23,6 +23,13 @@ const DIV_QNAN: u32 = 0x7fc00000u;
 // Bits of +inf (also the largest non-NaN magnitude).
 const DIV_INF: u32 = 0x7f800000u;
 
+// The canonical quiet NaN as a value: from a `let`, since a constant
+// expression may not evaluate to NaN (Tint refuses the shader; see f32_inf).
+fn div_qnan() -> f32 {
+    let bits = DIV_QNAN;
+    return bitcast<f32>(bits);
+}
+
 // a / b correctly rounded (round to nearest, ties to even) with gradual
 // underflow, computed with integer operations only. Bit-identical to the CPU's
 // a / b, except that every NaN result is the canonical quiet NaN.
@@ -35,11 +42,11 @@ fn div_cr(a: f32, b: f32) -> f32 {
 
     // Special operands: NaN, infinities, zeros.
     if abs_a > DIV_INF || abs_b > DIV_INF {
-        return bitcast<f32>(DIV_QNAN);
+        return div_qnan();
     }
     if abs_a == DIV_INF {
         if abs_b == DIV_INF {
-            return bitcast<f32>(DIV_QNAN); // inf / inf
+            return div_qnan(); // inf / inf
         }
         return bitcast<f32>(sign | DIV_INF); // inf / finite
     }
@@ -48,7 +55,7 @@ fn div_cr(a: f32, b: f32) -> f32 {
     }
     if abs_b == 0u {
         if abs_a == 0u {
-            return bitcast<f32>(DIV_QNAN); // 0 / 0
+            return div_qnan(); // 0 / 0
         }
         return bitcast<f32>(sign | DIV_INF); // x / 0
     }

@@ -61,7 +61,9 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     for (var k = 0u; k < 3u; k++) {
         let v = vertex_index(3u * t + k);
         let base = v * gp.stride + gp.offset;
-        var p = vec3<f32>(bitcast<f32>(0x7fc00000u));
+        // NaN from a `let`: a constant NaN is refused by Tint (see f32_inf).
+        let nan_bits = 0x7fc00000u;
+        var p = vec3<f32>(bitcast<f32>(nan_bits));
         // Within the buffer (and no overflow of the address): read it.
         if v < 0x40000000u / max(gp.stride, 1u) && base + 3u <= arrayLength(&vertices) {
             p = vec3<f32>(bitcast<f32>(vertices[base]), bitcast<f32>(vertices[base + 1u]), bitcast<f32>(vertices[base + 2u]));

@@ -456,10 +456,10 @@ fn finish(r: u32) {
 fn ray_is_valid(ray: Ray) -> bool {
     let o = ray.origin;
     let d = ray.dir;
-    let finite_o = abs(o[0]) <= 3.4028235e38 && abs(o[1]) <= 3.4028235e38 && abs(o[2]) <= 3.4028235e38;
-    let finite_d = abs(d[0]) <= 3.4028235e38 && abs(d[1]) <= 3.4028235e38 && abs(d[2]) <= 3.4028235e38;
+    let finite_o = abs(o[0]) <= F32_MAX && abs(o[1]) <= F32_MAX && abs(o[2]) <= F32_MAX;
+    let finite_d = abs(d[0]) <= F32_MAX && abs(d[1]) <= F32_MAX && abs(d[2]) <= F32_MAX;
     let nonzero = !(d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0);
-    let range_ok = ray.tmin >= 0.0 && abs(ray.tmin) <= 3.4028235e38 && !(ray.tmax < ray.tmin) && ray.tmax == ray.tmax;
+    let range_ok = ray.tmin >= 0.0 && abs(ray.tmin) <= F32_MAX && !(ray.tmax < ray.tmin) && ray.tmax == ray.tmax;
     return finite_o && finite_d && nonzero && range_ok;
 }
 

@@ -51,12 +51,20 @@ const UNFINISHED_ID: u32 = 0xfffffffeu;
 // dirt_gpu::STRUCTURE_FULL: the structure's lists did not fit their ids.
 const STRUCTURE_FULL_ID: u32 = 0xfffffffdu;
 
-// WGSL has no infinity literal: make them from bits.
+// The largest finite f32, exactly (the decimal 3.4028235e38 is above it, and
+// Tint refuses a literal that f32 cannot represent).
+const F32_MAX: f32 = 0x1.fffffep+127f;
+
+// WGSL has no infinity literal, and a constant expression may not evaluate
+// to one (Tint refuses the shader; naga folds it): make them from bits held
+// in a `let`, which makes the bitcast a run-time expression.
 fn f32_inf() -> f32 {
-    return bitcast<f32>(0x7f800000u);
+    let bits = 0x7f800000u;
+    return bitcast<f32>(bits);
 }
 fn f32_neg_inf() -> f32 {
-    return bitcast<f32>(0xff800000u);
+    let bits = 0xff800000u;
+    return bitcast<f32>(bits);
 }
 
 // A miss (dirt_math::Hit::MISS).
