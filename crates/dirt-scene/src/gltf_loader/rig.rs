@@ -334,6 +334,20 @@ fn read_clips(ctx: &Ctx, doc: &gltf::Document) -> Result<Vec<Clip>, SceneError> 
             };
             let node = ch.target().node().index();
             let sampler = ch.sampler();
+            // `property()` unwraps the path, which a malformed file may leave invalid.
+            let path = doc
+                .as_json()
+                .animations
+                .get(anim.index())
+                .and_then(|a| a.channels.get(ci))
+                .map(|c| &c.target.path);
+            if !matches!(path, Some(gltf::json::validation::Checked::Valid(_))) {
+                return Err(animation_err(
+                    ctx,
+                    &location,
+                    "targets a path that is not translation, rotation, scale or weights".into(),
+                ));
+            }
             let (property, dims, width) = match ch.target().property() {
                 GltfProperty::Translation => (Property::Translation, Dimensions::Vec3, 3),
                 GltfProperty::Rotation => (Property::Rotation, Dimensions::Vec4, 4),
