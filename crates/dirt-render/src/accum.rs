@@ -1,11 +1,11 @@
-//! Progressive accumulation: one sample pass at a time is added up; the mean
+//! Progressive accumulation (the viewer's and the web page's): one sample pass at a time is added up; the mean
 //! is what `dirt render` of as many samples per pixel gives (the same sums in
 //! the same order, the same `1 / n` scale), tone-mapped as its PNG is.
 
+use crate::Image;
 use dirt_math::Vec3;
-use dirt_render::Image;
 
-use crate::ViewError;
+use crate::RenderError;
 
 /// The running sum of sample passes at one resolution.
 #[derive(Clone, Debug)]
@@ -34,14 +34,13 @@ impl Accumulator {
     }
 
     /// Adds one pass of radiance, rows top to bottom.
-    pub fn add(&mut self, radiance: &[Vec3]) -> Result<(), ViewError> {
+    pub fn add(&mut self, radiance: &[Vec3]) -> Result<(), RenderError> {
         if radiance.len() != self.sum.len() {
-            return Err(ViewError::Internal(format!(
-                "a sample pass of {} pixels for a {}x{} image",
-                radiance.len(),
-                self.width,
-                self.height
-            )));
+            return Err(RenderError::PassSize {
+                pixels: radiance.len(),
+                width: self.width,
+                height: self.height,
+            });
         }
         for (acc, r) in self.sum.iter_mut().zip(radiance) {
             *acc += *r;

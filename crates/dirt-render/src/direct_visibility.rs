@@ -159,34 +159,64 @@ pub fn primary_hits(
     rays: &[Ray],
     pixels: &[usize],
 ) -> Result<(Vec<Hit>, VisibilityStats), RenderError> {
-    let mut stats = VisibilityStats::default();
-    let mut limited = rays.to_vec();
-    let mut candidates = vec![Hit::MISS; rays.len()];
-    for (i, ray) in limited.iter_mut().enumerate() {
-        let c = raster.prim.get(pixels[i]).copied().unwrap_or(INVALID_ID);
-        let hit = tris
-            .get(c as usize)
-            .and_then(|t| intersect(ray, &RayShear::new(ray), t));
-        match hit {
-            Some((t, u, v)) => {
-                ray.tmax = t;
-                candidates[i] = Hit { prim: c, t, u, v };
-                stats.confirmed += 1;
+    let proposed = Proposed::new(tris, raster, rays, pixels);
+    let traced = tracer.trace(&proposed.limited)?;
+    proposed.settle(traced)
+}
+
+/// The rasteriser's proposals for a batch of primary rays, confirmed by the
+/// exact test: the rays limited to the confirmed distances (what is traced)
+/// and the confirmed hits. [`primary_hits`] in two halves, so that the trace
+/// between them can be awaited.
+#[derive(Debug)]
+pub struct Proposed {
+    /// The rays, each limited to its confirmed candidate's `t` (unchanged where none was).
+    pub limited: Vec<Ray>,
+    candidates: Vec<Hit>,
+    stats: VisibilityStats,
+}
+
+impl Proposed {
+    /// Confirms the rasterised primitive of each ray's pixel (`pixels[i]`) with the exact test.
+    pub fn new(tris: &[Triangle], raster: &Raster, rays: &[Ray], pixels: &[usize]) -> Proposed {
+        let mut stats = VisibilityStats::default();
+        let mut limited = rays.to_vec();
+        let mut candidates = vec![Hit::MISS; rays.len()];
+        for (i, ray) in limited.iter_mut().enumerate() {
+            let c = raster.prim.get(pixels[i]).copied().unwrap_or(INVALID_ID);
+            let hit = tris
+                .get(c as usize)
+                .and_then(|t| intersect(ray, &RayShear::new(ray), t));
+            match hit {
+                Some((t, u, v)) => {
+                    ray.tmax = t;
+                    candidates[i] = Hit { prim: c, t, u, v };
+                    stats.confirmed += 1;
+                }
+                None => stats.fallback += 1,
             }
-            None => stats.fallback += 1,
+        }
+        Proposed {
+            limited,
+            candidates,
+            stats,
         }
     }
-    let traced = tracer.trace(&limited)?;
-    if traced.len() != rays.len() {
-        return Err(RenderError::HitCount {
-            expected: rays.len(),
-            got: traced.len(),
-        });
+
+    /// The primary hits: the closer of each confirmed candidate and the
+    /// trace of its limited ray.
+    pub fn settle(self, traced: Vec<Hit>) -> Result<(Vec<Hit>, VisibilityStats), RenderError> {
+        if traced.len() != self.candidates.len() {
+            return Err(RenderError::HitCount {
+                expected: self.candidates.len(),
+                got: traced.len(),
+            });
+        }
+        let hits = traced
+            .into_iter()
+            .zip(self.candidates)
+            .map(|(h, c)| if c.closer_than(&h) { c } else { h })
+            .collect();
+        Ok((hits, self.stats))
     }
-    let hits = traced
-        .into_iter()
-        .zip(candidates)
-        .map(|(h, c)| if c.closer_than(&h) { c } else { h })
-        .collect();
-    Ok((hits, stats))
 }

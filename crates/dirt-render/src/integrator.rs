@@ -11,12 +11,13 @@ use crate::output::Image;
 use crate::rng::{Sampler, dim};
 use crate::shade::{ShadeContext, offset_origin};
 use crate::shading_buffer::ShadingBuffer;
-use crate::trace::Tracer;
+use crate::trace::{AsyncTrace, Blocking, Tracer, now};
 use crate::{Mode, RenderError, Settings, shift};
 use dirt_math::{Hit, Ray, Vec3};
 use dirt_scene::Scene;
 use rayon::prelude::*;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// Reported after every sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,12 +81,16 @@ struct Counters {
 }
 
 impl Counters {
-    fn trace(&mut self, tracer: &mut dyn Tracer, rays: &[Ray]) -> Result<Vec<Hit>, RenderError> {
+    async fn trace<T: AsyncTrace + ?Sized>(
+        &mut self,
+        tracer: &mut T,
+        rays: &[Ray],
+    ) -> Result<Vec<Hit>, RenderError> {
         if rays.is_empty() {
             return Ok(Vec::new());
         }
         let t = Instant::now();
-        let hits = tracer.trace(rays)?;
+        let hits = tracer.trace_rays(rays).await?;
         self.trace_time += t.elapsed();
         self.rays += rays.len() as u64;
         if hits.len() != rays.len() {
@@ -156,7 +161,7 @@ impl<'s> Renderer<'s> {
             visibility: VisibilityStats::default(),
         };
         for sample in 0..s.spp {
-            let radiance = self.sample(tracer, sample, &mut counters)?;
+            let radiance = now(self.sample(&mut Blocking(tracer), sample, &mut counters))?;
             sum.par_iter_mut()
                 .zip(&radiance)
                 .for_each(|(acc, r)| *acc += *r);
@@ -192,12 +197,22 @@ impl<'s> Renderer<'s> {
         tracer: &mut dyn Tracer,
         sample: u32,
     ) -> Result<SamplePass, RenderError> {
+        now(self.render_sample_async(&mut Blocking(tracer), sample))
+    }
+
+    /// [`Renderer::render_sample`] through a tracer whose hits come later
+    /// (a browser page's GPU): the same passes, bit for bit, awaited.
+    pub async fn render_sample_async<T: AsyncTrace + ?Sized>(
+        &self,
+        tracer: &mut T,
+        sample: u32,
+    ) -> Result<SamplePass, RenderError> {
         let mut counters = Counters {
             rays: 0,
             trace_time: Duration::ZERO,
             visibility: VisibilityStats::default(),
         };
-        let radiance = self.sample(tracer, sample, &mut counters)?;
+        let radiance = self.sample(tracer, sample, &mut counters).await?;
         Ok(SamplePass {
             radiance,
             rays: counters.rays,
@@ -228,9 +243,9 @@ impl<'s> Renderer<'s> {
     }
 
     /// The radiance of every pixel for one sample.
-    fn sample(
+    async fn sample<T: AsyncTrace + ?Sized>(
         &self,
-        tracer: &mut dyn Tracer,
+        tracer: &mut T,
         sample: u32,
         counters: &mut Counters,
     ) -> Result<Vec<Vec3>, RenderError> {
@@ -238,13 +253,10 @@ impl<'s> Renderer<'s> {
         let rays = self.primary_rays(sample);
         let pixels: Vec<usize> = (0..rays.len()).collect();
         let t = Instant::now();
-        let (hits, vis) = direct_visibility::primary_hits(
-            tracer,
-            &self.scene.triangles,
-            &self.raster,
-            &rays,
-            &pixels,
-        )?;
+        let proposed =
+            direct_visibility::Proposed::new(&self.scene.triangles, &self.raster, &rays, &pixels);
+        let traced = tracer.trace_rays(&proposed.limited).await?;
+        let (hits, vis) = proposed.settle(traced)?;
         counters.trace_time += t.elapsed();
         counters.rays += rays.len() as u64;
         counters.visibility.confirmed += vis.confirmed;
@@ -252,7 +264,9 @@ impl<'s> Renderer<'s> {
         let primary = self.fetch_all(&rays, &hits);
 
         if s.mode == Mode::Ao {
-            return self.ambient_occlusion(tracer, sample, &primary, counters);
+            return self
+                .ambient_occlusion(tracer, sample, &primary, counters)
+                .await;
         }
 
         let eye: Vec<Vec3> = rays.iter().map(|r| r.origin()).collect();
@@ -274,14 +288,14 @@ impl<'s> Renderer<'s> {
         for bounce in 1..=bounces {
             // Next-event estimation at G(k).
             let (shadow_rays, shadows) = ctx.next_event(&buf, bounce);
-            let shadow_hits = counters.trace(tracer, &shadow_rays)?;
+            let shadow_hits = counters.trace(tracer, &shadow_rays).await?;
             ctx.apply_shadows(&mut buf, &shadows, &shadow_hits);
             // The ray from G(k) to G(k+1).
             let (rays, owner) = ctx.sample_scatter(&mut buf, bounce);
             if rays.is_empty() {
                 break;
             }
-            let hits = counters.trace(tracer, &rays)?;
+            let hits = counters.trace(tracer, &rays).await?;
             let fetched = self.fetch_all(&rays, &hits);
             for (i, sp) in owner.iter().zip(fetched) {
                 buf.next[*i] = sp;
@@ -294,9 +308,9 @@ impl<'s> Renderer<'s> {
 
     /// One cosine-distributed occlusion ray per primary hit, `ao_radius` long:
     /// 1 when it hits nothing, else 0. Pixels whose primary ray misses get 1.
-    fn ambient_occlusion(
+    async fn ambient_occlusion<T: AsyncTrace + ?Sized>(
         &self,
-        tracer: &mut dyn Tracer,
+        tracer: &mut T,
         sample: u32,
         primary: &[Option<SurfacePoint>],
         counters: &mut Counters,
@@ -319,7 +333,7 @@ impl<'s> Renderer<'s> {
                 }
             }
         }
-        let hits = counters.trace(tracer, &rays)?;
+        let hits = counters.trace(tracer, &rays).await?;
         let mut out: Vec<Vec3> = primary
             .iter()
             .map(|sp| if sp.is_some() { Vec3::ZERO } else { Vec3::ONE })

@@ -32,6 +32,7 @@
 //! that return the same hits (DIRT and the reference do: both are exact)
 //! give images that are identical to the bit.
 
+pub mod accum;
 pub mod bsdf;
 pub mod camera;
 pub mod direct_visibility;
@@ -40,6 +41,7 @@ pub mod fetch;
 pub mod integrator;
 pub mod lights;
 pub mod metrics;
+pub mod orbit;
 pub mod output;
 pub mod reference;
 pub mod rng;
@@ -52,7 +54,7 @@ pub use camera::Camera;
 pub use features::{Feature, features};
 pub use integrator::{Progress, Rendered, Renderer, SamplePass};
 pub use output::Image;
-pub use trace::Tracer;
+pub use trace::{AsyncTrace, Blocking, Tracer};
 
 use std::path::PathBuf;
 
@@ -75,6 +77,16 @@ pub enum RenderError {
     BadCamera(String),
     #[error("the tracer returned {got} hits for {expected} rays")]
     HitCount { expected: usize, got: usize },
+    /// A blocking entry point was given hits that were not ready: a tracer
+    /// whose hits come later needs [`Renderer::render_sample_async`].
+    #[error("the tracer's hits were not ready: use the async entry point")]
+    NotReady,
+    #[error("a sample pass of {pixels} pixels for a {width}x{height} image")]
+    PassSize {
+        pixels: usize,
+        width: u32,
+        height: u32,
+    },
     #[error("images differ in size: {a:?} and {b:?}")]
     SizeMismatch { a: (u32, u32), b: (u32, u32) },
     #[error(transparent)]

@@ -1,12 +1,12 @@
-//! The viewer's camera: an eye orbiting a target, with +Y up. It is always
+//! The interactive camera (the viewer's and the web page's): an eye orbiting a target, with +Y up. It is always
 //! handed to the renderer as `Camera::look_at(eye, target, fov)`, the camera
 //! `dirt render --eye --target --fov` makes, so the numbers the viewer prints
 //! reproduce its image.
 
+use crate::Camera;
 use dirt_math::Vec3;
-use dirt_render::Camera;
 
-use crate::ViewError;
+use crate::RenderError;
 
 /// Radians per pixel of mouse drag when orbiting.
 const ORBIT_PER_PIXEL: f32 = 0.005;
@@ -28,7 +28,7 @@ pub struct Orbit {
 impl Orbit {
     /// An orbit starting (and resetting) at `eye`, `target`, `fov`; refused
     /// where `Camera::look_at` would refuse it.
-    pub fn new(eye: Vec3, target: Vec3, fov: f32) -> Result<Self, ViewError> {
+    pub fn new(eye: Vec3, target: Vec3, fov: f32) -> Result<Self, RenderError> {
         Camera::look_at(eye, target, fov)?;
         Ok(Self {
             eye,
@@ -38,9 +38,35 @@ impl Orbit {
         })
     }
 
+    /// The starting orbit of `scene`: its camera (or a framing of it) as
+    /// `dirt render` places it, with the overrides given; the target is on
+    /// the view axis at the depth of the scene's centre.
+    pub fn for_scene(
+        scene: &dirt_scene::Scene,
+        aspect: f32,
+        eye: Option<Vec3>,
+        target: Option<Vec3>,
+        fov: Option<f32>,
+    ) -> Result<Self, RenderError> {
+        let base = Camera::for_scene(scene, aspect)?;
+        let eye = eye.unwrap_or(base.eye);
+        let target = target.unwrap_or_else(|| {
+            let b = scene.bounds();
+            let depth = (b.center() - base.eye).dot(base.forward);
+            let depth = if depth > 0.0 {
+                depth
+            } else {
+                (b.extent().length() * 0.5).max(1e-3)
+            };
+            base.eye + base.forward * depth
+        });
+        let fov = fov.unwrap_or_else(|| (base.tan_half_fov.atan() * 2.0).to_degrees());
+        Self::new(eye, target, fov)
+    }
+
     /// The renderer's camera.
-    pub fn camera(&self) -> Result<Camera, ViewError> {
-        Ok(Camera::look_at(self.eye, self.target, self.fov)?)
+    pub fn camera(&self) -> Result<Camera, RenderError> {
+        Camera::look_at(self.eye, self.target, self.fov)
     }
 
     fn distance(&self) -> f32 {

@@ -470,3 +470,54 @@ fn sample_passes_add_up_to_the_render() {
         assert_eq!(rays, whole.rays, "{mode:?}");
     }
 }
+
+/// A tracer whose hits come one poll late, as a browser GPU's read-back does.
+struct Late(DirtCpu);
+
+impl dirt_render::AsyncTrace for Late {
+    fn name(&self) -> String {
+        "late".into()
+    }
+    async fn trace_rays(&mut self, rays: &[Ray]) -> Result<Vec<dirt_math::Hit>, RenderError> {
+        YieldOnce(false).await;
+        Ok(self.0.trace(rays)?)
+    }
+}
+
+/// Pending once (waking its task), then ready.
+struct YieldOnce(bool);
+
+impl std::future::Future for YieldOnce {
+    type Output = ();
+    fn poll(
+        mut self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+    ) -> std::task::Poll<()> {
+        if self.0 {
+            return std::task::Poll::Ready(());
+        }
+        self.0 = true;
+        cx.waker().wake_by_ref();
+        std::task::Poll::Pending
+    }
+}
+
+/// A sample through a tracer whose hits arrive later (awaited) is the
+/// blocking sample, bit for bit.
+#[test]
+fn an_awaited_sample_is_the_blocking_sample() {
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    for mode in [Mode::Pt, Mode::Ao] {
+        let s = settings(24, 16, 2, 3, mode);
+        let camera = Camera::for_scene(&scene, 1.5).expect("camera");
+        let r = Renderer::new(&scene, camera, s).expect("renderer");
+        let mut t = DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
+            .expect("dirt build");
+        let blocking = r.render_sample(&mut t, 1).expect("pass");
+        let mut late = Late(t);
+        let awaited =
+            pollster::block_on(r.render_sample_async(&mut late, 1)).expect("awaited pass");
+        assert_eq!(awaited.radiance, blocking.radiance, "{mode:?}");
+        assert_eq!(awaited.rays, blocking.rays, "{mode:?}");
+    }
+}

@@ -16,16 +16,16 @@
 //!
 //! This is the only crate of the project that knows winit.
 
-pub mod accum;
+pub use dirt_render::accum;
 mod app;
-pub mod orbit;
+pub use dirt_render::orbit;
 pub mod present;
 
 use dirt_core::{AdsParams, CoreError, Tracer, Traversal};
 use dirt_cpu::{CpuError, DirtCpu};
 use dirt_gpu::{DirtGpu, Gpu, GpuError, GpuOptions};
 use dirt_math::Vec3;
-use dirt_render::{Camera, Mode, RenderError, Settings};
+use dirt_render::{Mode, RenderError, Settings};
 use dirt_scene::SceneError;
 
 /// Everything that can go wrong in the viewer.
@@ -198,22 +198,13 @@ pub fn start_camera(
     scene: &dirt_scene::Scene,
     aspect: f32,
 ) -> Result<orbit::Orbit, ViewError> {
-    let base = Camera::for_scene(scene, aspect)?;
-    let eye = options.eye.unwrap_or(base.eye);
-    let target = options.target.unwrap_or_else(|| {
-        let b = scene.bounds();
-        let depth = (b.center() - base.eye).dot(base.forward);
-        let depth = if depth > 0.0 {
-            depth
-        } else {
-            (b.extent().length() * 0.5).max(1e-3)
-        };
-        base.eye + base.forward * depth
-    });
-    let fov = options
-        .fov
-        .unwrap_or_else(|| (base.tan_half_fov.atan() * 2.0).to_degrees());
-    orbit::Orbit::new(eye, target, fov)
+    Ok(orbit::Orbit::for_scene(
+        scene,
+        aspect,
+        options.eye,
+        options.target,
+        options.fov,
+    )?)
 }
 
 /// Parameters for the scene's triangles: fixed, or the cost model's choice
@@ -378,7 +369,7 @@ mod tests {
         let scene = dirt_scene::open("cornell").expect("cornell");
         let o = ViewOptions::default();
         let orbit = start_camera(&o, &scene, 4.0 / 3.0).expect("camera");
-        let base = Camera::for_scene(&scene, 4.0 / 3.0).expect("base");
+        let base = dirt_render::Camera::for_scene(&scene, 4.0 / 3.0).expect("base");
         let cam = orbit.camera().expect("camera");
         assert!((cam.eye - base.eye).length() < 1e-5);
         assert!((cam.forward - base.forward).length() < 1e-4);
