@@ -63,3 +63,22 @@ RUN_PACKAGES=(ca-certificates curl gcc libc6-dev python3 python3-numpy mesa-vulk
 # What `scripts/eval` needs: the above and Embree 3 (a peer); node/npm for the
 # bunny only where there is no npm yet (a nodejs from elsewhere may bundle it).
 EVAL_PACKAGES=("${TEST_PACKAGES[@]}" libembree-dev)
+
+# The browser build: the wasm32 target and wasm-bindgen-cli at exactly the
+# version of wasm-bindgen in Cargo.lock (the CLI and the crate must match),
+# installed into target/tools/bin (a debug build: it compiles in about two
+# minutes and runs fast enough), which is put on PATH.
+ensure_wasm_tools() {
+    rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknown ||
+        rustup target add wasm32-unknown-unknown
+    local version
+    version=$(awk '/^name = "wasm-bindgen"$/ { getline; gsub(/[^0-9.]/, ""); print; exit }' Cargo.lock)
+    export PATH="$PWD/target/tools/bin:$PATH"
+    if [ "$(wasm-bindgen --version 2>/dev/null)" != "wasm-bindgen $version" ]; then
+        echo "installing wasm-bindgen-cli $version into target/tools" >&2
+        cargo install --quiet --debug --root target/tools wasm-bindgen-cli --version "=$version"
+    fi
+}
+
+# What the browser tests need: Debian's Chromium and its WebDriver.
+BROWSER_PACKAGES=(chromium chromium-driver)

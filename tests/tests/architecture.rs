@@ -102,6 +102,17 @@ fn the_layers_only_depend_downwards() {
                 "dirt-render",
             ],
         ),
+        (
+            "dirt-web",
+            &[
+                "dirt-math",
+                "dirt-core",
+                "dirt-scene",
+                "dirt-cpu",
+                "dirt-gpu",
+                "dirt-render",
+            ],
+        ),
     ];
     for (name, ok) in allowed {
         let extra: Vec<String> = dirt_deps(name).difference(&set(ok)).cloned().collect();
@@ -155,6 +166,7 @@ fn only_the_viewer_knows_winit() {
         "dirt-shaders",
         "dirt-render",
         "dirt-eval",
+        "dirt-web",
         "dirt-cli",
     ] {
         assert!(
@@ -177,6 +189,7 @@ fn each_library_crate_has_one_error_enum() {
         "dirt-render",
         "dirt-eval",
         "dirt-view",
+        "dirt-web",
         "dirt-cli",
     ] {
         let derives: usize = sources(name)

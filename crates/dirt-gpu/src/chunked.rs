@@ -6,7 +6,7 @@
 //! bindings ([`Gpu::bindings`]) do. [`dirt_core::BindingLimits`] is the rule,
 //! shared with the cost model.
 
-use crate::{Gpu, GpuError, read_back};
+use crate::{Gpu, GpuError, read_back_async};
 pub(crate) use dirt_core::SplitArray as Kind;
 
 /// Which of a structure's arrays take more than one binding: one bit per
@@ -201,7 +201,7 @@ impl Chunked {
     }
 
     /// The first `count` elements, read back, as bytes laid end to end.
-    pub(crate) fn read(&self, gpu: &Gpu, count: u64) -> Result<Vec<u8>, GpuError> {
+    pub(crate) async fn read(&self, gpu: &Gpu, count: u64) -> Result<Vec<u8>, GpuError> {
         let elem = self.kind.elem_bytes();
         let per_chunk = 1u64 << self.shift;
         let mut out = Vec::with_capacity((count * elem) as usize);
@@ -211,7 +211,7 @@ impl Chunked {
                 break;
             }
             let n = (count - start).min(per_chunk);
-            out.extend(read_back(gpu, buf, 0, n * elem)?);
+            out.extend(read_back_async(gpu, buf, 0, n * elem).await?);
         }
         Ok(out)
     }

@@ -339,17 +339,36 @@ impl Gpu {
     /// Runs `f` inside out-of-memory and validation error scopes: what wgpu
     /// reports there becomes a [`GpuError`] naming `what`, instead of going
     /// to the device's uncaptured-error handler (which panics by default).
-    /// Popping a scope does not wait for the GPU.
+    /// Popping a scope does not wait for the GPU natively; in a browser it
+    /// resolves on the page's event loop, so there `f` runs without scopes
+    /// (errors reach the handler) and only the async forms capture them
+    /// ([`Gpu::scoped_async`]).
     pub(crate) fn scoped<T>(
         &self,
         what: &'static str,
         f: impl FnOnce() -> Result<T, GpuError>,
     ) -> Result<T, GpuError> {
+        #[cfg(target_arch = "wasm32")]
+        {
+            let _ = what;
+            f()
+        }
+        #[cfg(not(target_arch = "wasm32"))]
+        crate::block(what, self.scoped_async(what, async { f() }))
+    }
+
+    /// [`Gpu::scoped`] around a future: the scopes are popped and awaited
+    /// when it is done.
+    pub(crate) async fn scoped_async<T>(
+        &self,
+        what: &'static str,
+        fut: impl Future<Output = Result<T, GpuError>>,
+    ) -> Result<T, GpuError> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let out = f();
-        let v = pollster::block_on(validation.pop());
-        let o = pollster::block_on(oom.pop());
+        let out = fut.await;
+        let v = validation.pop().await;
+        let o = oom.pop().await;
         if let Some(e) = o {
             return Err(GpuError::OutOfMemory {
                 what,
@@ -360,6 +379,24 @@ impl Gpu {
             return Err(self.classify(what, e.to_string()));
         }
         out
+    }
+
+    /// Waits for all submitted work without blocking a browser page:
+    /// natively [`Gpu::wait`]; in a browser the queue's work-done callback,
+    /// awaited.
+    pub async fn settle(&self) -> Result<(), GpuError> {
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            self.wait()
+        }
+        #[cfg(target_arch = "wasm32")]
+        {
+            let (tx, rx) = futures_channel::oneshot::channel();
+            self.queue.on_submitted_work_done(move || {
+                let _ = tx.send(());
+            });
+            rx.await.map_err(|e| GpuError::Device(e.to_string()))
+        }
     }
 
     /// A wgpu error message as a [`GpuError`]: a lost device, or a validation error.

@@ -216,8 +216,9 @@ mod tests {
             let buf =
                 Chunked::with_data(gpu, Kind::Offsets, bytemuck::cast_slice(&data)).expect("fits");
             scan(gpu, Split::of(&[&buf]), &buf, n as u64).expect("scan");
-            let got =
-                bytemuck::pod_collect_to_vec::<u8, u32>(&buf.read(gpu, n as u64).expect("read"));
+            let got = bytemuck::pod_collect_to_vec::<u8, u32>(
+                &crate::block("a test read", buf.read(gpu, n as u64)).expect("read"),
+            );
             let mut acc = 0;
             let want: Vec<u32> = data
                 .iter()
@@ -246,8 +247,9 @@ mod tests {
                 Chunked::with_data(&gpu, Kind::Offsets, bytemuck::cast_slice(&data)).expect("fits");
             assert!(buf.is_split(), "n = {n}");
             scan(&gpu, Split::of(&[&buf]), &buf, n as u64).expect("scan");
-            let got =
-                bytemuck::pod_collect_to_vec::<u8, u32>(&buf.read(&gpu, n as u64).expect("read"));
+            let got = bytemuck::pod_collect_to_vec::<u8, u32>(
+                &crate::block("a test read", buf.read(&gpu, n as u64)).expect("read"),
+            );
             let want: Vec<u32> = data
                 .iter()
                 .scan(0, |acc, x| {

@@ -201,6 +201,49 @@ impl GpuAds {
         })
     }
 
+    /// The latest build's list total and fault word read back, once its
+    /// submission is done: the feedback of that build, awaited instead of
+    /// left to the map callback (a browser runs that callback on its event
+    /// loop, at no time a page can wait for). What is read is also noted as
+    /// the latest completed build's, so the next build grows the ids to fit.
+    pub(crate) async fn settle_feedback(
+        &self,
+        gpu: &Gpu,
+    ) -> Result<Option<BuildFeedback>, GpuError> {
+        let Some(f) = self.frame.as_ref() else {
+            return Ok(None);
+        };
+        let (total, total_at) = self
+            .offsets
+            .locate(f.n_lists)
+            .ok_or_else(|| GpuError::Device("the list offsets have no total".into()))?;
+        // Both words in one copy and one read-back.
+        let staging = buffer(
+            gpu,
+            "build feedback (awaited)",
+            8,
+            wgpu::BufferUsages::MAP_READ | COPY_DST,
+        );
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(total, total_at, &staging, 0, 4);
+        let bad_at = std::mem::offset_of!(FrameState, bad) as u64;
+        enc.copy_buffer_to_buffer(&f.state, bad_at, &staging, 4, 4);
+        gpu.submit(enc);
+        let bytes = crate::map_read_async(gpu, &staging).await?;
+        let words = bytes
+            .get(..8)
+            .ok_or_else(|| GpuError::Readback("the build feedback came back short".into()))?;
+        let [needed, bad]: [u32; 2] = bytemuck::pod_read_unaligned(words);
+        f.shared.needed.store(needed as u64, Ordering::Release);
+        f.shared.bad.store(bad, Ordering::Release);
+        let mut fb = self.feedback();
+        if let Some(fb) = fb.as_mut() {
+            fb.entries_needed = needed as u64;
+            fb.non_finite = (bad != 0).then(|| u32::MAX - bad);
+        }
+        Ok(fb)
+    }
+
     /// Records a build over `meshes` (their triangles in order, ids counted
     /// from the first mesh's first triangle) into `enc`. Nothing is submitted
     /// or waited for. Errors come before anything is recorded: a structure

@@ -223,6 +223,9 @@ impl Pipelines {
         passthrough: bool,
         chunks: dirt_shaders::Chunks,
     ) -> Result<Pipelines, GpuError> {
+        // A browser resolves a popped scope only on the page's event loop:
+        // there a shader error reaches the device's uncaptured-error handler.
+        #[cfg(not(target_arch = "wasm32"))]
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let fd = spirv::compile(device, "fill_depth", passthrough, chunks)?;
         let md = spirv::compile(device, "mip_depth", passthrough, chunks)?;
@@ -261,6 +264,7 @@ impl Pipelines {
             gather: compute(device, &ga, "gather")?,
             views,
         };
+        #[cfg(not(target_arch = "wasm32"))]
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader {
                 stage: "pipelines",
@@ -418,8 +422,18 @@ pub(crate) fn record_dispatch(
     pass.dispatch_workgroups(x, y, z);
 }
 
-/// Copies `size` bytes of `src` from `offset` back to the CPU.
+/// Copies `size` bytes of `src` from `offset` back to the CPU (blocks; see [`block`]).
 pub(crate) fn read_back(
+    gpu: &Gpu,
+    src: &wgpu::Buffer,
+    offset: u64,
+    size: u64,
+) -> Result<Vec<u8>, GpuError> {
+    block("a read-back", read_back_async(gpu, src, offset, size))
+}
+
+/// [`read_back`] without blocking: the form a browser page awaits.
+pub(crate) async fn read_back_async(
     gpu: &Gpu,
     src: &wgpu::Buffer,
     offset: u64,
@@ -438,17 +452,22 @@ pub(crate) fn read_back(
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(src, offset, &staging, 0, size);
     gpu.submit(enc);
-    map_read(gpu, &staging)
+    map_read_async(gpu, &staging).await
 }
 
-/// Maps `staging` (MAP_READ) once the GPU is done and copies it out.
-pub(crate) fn map_read(gpu: &Gpu, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
-    let (tx, rx) = std::sync::mpsc::channel();
+/// Maps `staging` (MAP_READ) once the GPU is done and copies it out. A
+/// native device runs the map's callback while it is polled (here); a
+/// browser runs it on the page's event loop, which the `await` yields to.
+pub(crate) async fn map_read_async(gpu: &Gpu, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let (tx, rx) = futures_channel::oneshot::channel();
     staging.map_async(wgpu::MapMode::Read, .., move |r| {
         let _ = tx.send(r);
     });
+    #[cfg(not(target_arch = "wasm32"))]
     gpu.wait()?;
-    rx.recv()
+    #[cfg(target_arch = "wasm32")]
+    let _ = gpu;
+    rx.await
         .map_err(|e| GpuError::Readback(e.to_string()))?
         .map_err(|e| GpuError::Readback(e.to_string()))?;
     let view = staging
@@ -458,6 +477,34 @@ pub(crate) fn map_read(gpu: &Gpu, staging: &wgpu::Buffer) -> Result<Vec<u8>, Gpu
     drop(view);
     staging.unmap();
     Ok(out)
+}
+
+/// Runs `fut`, one of dirt's async GPU operations, to its end on the
+/// calling thread. Natively the device completes work while it is polled,
+/// so `pollster` suffices. A browser completes it only on the page's event
+/// loop, which a blocking call would stall: there `fut` is polled once, and
+/// one that is not ready at once is [`GpuError::Unsupported`] (use the
+/// `_async` form, e.g. [`DirtGpu::trace_async`]).
+pub(crate) fn block<T>(
+    what: &'static str,
+    fut: impl Future<Output = Result<T, GpuError>>,
+) -> Result<T, GpuError> {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let _ = what;
+        pollster::block_on(fut)
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let mut fut = std::pin::pin!(fut);
+        let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
+        match fut.as_mut().poll(&mut cx) {
+            std::task::Poll::Ready(out) => out,
+            std::task::Poll::Pending => Err(GpuError::Unsupported(format!(
+                "{what} waits for the GPU, and a browser page cannot block: use the async form"
+            ))),
+        }
+    }
 }
 
 /// Cells of every Hi-Z level of `n_slots` views of `tiles`² tiles.
@@ -607,15 +654,25 @@ impl GpuAds {
     /// The views as the passes read them (six entries; a view without
     /// content has slot [`dirt_math::view::NO_SLOT`]).
     pub fn read_views(&self, gpu: &Gpu) -> Result<Vec<ViewGpu>, GpuError> {
-        let bytes = read_back(gpu, &self.views_uniform, 0, 6 * 96)?;
+        block("reading the views", self.read_views_async(gpu))
+    }
+
+    /// [`GpuAds::read_views`] without blocking (a browser page awaits it).
+    pub async fn read_views_async(&self, gpu: &Gpu) -> Result<Vec<ViewGpu>, GpuError> {
+        let bytes = read_back_async(gpu, &self.views_uniform, 0, 6 * 96).await?;
         Ok(bytemuck::pod_collect_to_vec::<u8, ViewGpu>(&bytes))
     }
 
     /// Hi-Z levels read back, level 0 (the depth bounds) first, in the CPU's layout.
     pub fn read_hiz(&self, gpu: &Gpu) -> Result<Vec<Vec<[u32; 2]>>, GpuError> {
+        block("reading the Hi-Z", self.read_hiz_async(gpu))
+    }
+
+    /// [`GpuAds::read_hiz`] without blocking (a browser page awaits it).
+    pub async fn read_hiz_async(&self, gpu: &Gpu) -> Result<Vec<Vec<[u32; 2]>>, GpuError> {
         let tiles = self.params.tiles();
         let cells = bytemuck::pod_collect_to_vec::<u8, [u32; 2]>(
-            &self.hiz.read(gpu, hiz_cells(tiles, self.n_slots))?,
+            &self.hiz.read(gpu, hiz_cells(tiles, self.n_slots)).await?,
         );
         let mut rest = cells.as_slice();
         let mut out = Vec::new();
@@ -630,10 +687,15 @@ impl GpuAds {
 
     /// The id lists read back (offsets and ids; ids in GPU order inside each list).
     pub fn read_lists(&self, gpu: &Gpu) -> Result<IdLists, GpuError> {
+        block("reading the lists", self.read_lists_async(gpu))
+    }
+
+    /// [`GpuAds::read_lists`] without blocking (a browser page awaits it).
+    pub async fn read_lists_async(&self, gpu: &Gpu) -> Result<IdLists, GpuError> {
         let n_lists =
             self.n_slots as u64 * (self.params.tiles() as u64).pow(2) * self.params.buckets as u64;
         let offsets =
-            bytemuck::pod_collect_to_vec::<u8, u32>(&self.offsets.read(gpu, n_lists + 1)?);
+            bytemuck::pod_collect_to_vec::<u8, u32>(&self.offsets.read(gpu, n_lists + 1).await?);
         let total = offsets.last().copied().unwrap_or(0) as u64;
         if total > self.ids.capacity() {
             return Err(GpuError::TooLarge {
@@ -642,7 +704,7 @@ impl GpuAds {
                 limit: self.ids.capacity() * 4,
             });
         }
-        let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&self.ids.read(gpu, total)?);
+        let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&self.ids.read(gpu, total).await?);
         Ok(IdLists { offsets, ids })
     }
 }

@@ -21,7 +21,7 @@
 //! tiles, buckets, tests, u32), little-endian, tightly packed.
 
 use crate::fill_primitives::grid;
-use crate::{Gpu, GpuAds, GpuError, PoolHeader, TraceParams, map_read, read_back};
+use crate::{Gpu, GpuAds, GpuError, PoolHeader, TraceParams, map_read_async, read_back};
 use dirt_core::Traversal;
 use dirt_math::dda::hiz_levels;
 use dirt_math::{Hit, Ray, RayStats};
@@ -441,12 +441,30 @@ impl TraceResources {
         traversal: Traversal,
         with_stats: bool,
     ) -> Result<Traced, GpuError> {
-        gpu.scoped("the trace", || {
-            self.trace_host_unscoped(gpu, ads, rays, traversal, with_stats)
-        })
+        crate::block(
+            "the trace",
+            self.trace_async(gpu, ads, rays, traversal, with_stats),
+        )
     }
 
-    fn trace_host_unscoped(
+    /// [`TraceResources::trace_host`] without blocking: the form a browser
+    /// page awaits (its read-backs resolve on the page's event loop).
+    pub async fn trace_async(
+        &mut self,
+        gpu: &Gpu,
+        ads: &GpuAds,
+        rays: &[Ray],
+        traversal: Traversal,
+        with_stats: bool,
+    ) -> Result<Traced, GpuError> {
+        gpu.scoped_async(
+            "the trace",
+            self.trace_host_unscoped(gpu, ads, rays, traversal, with_stats),
+        )
+        .await
+    }
+
+    async fn trace_host_unscoped(
         &mut self,
         gpu: &Gpu,
         ads: &GpuAds,
@@ -503,7 +521,7 @@ impl TraceResources {
                 }
                 gpu.submit(enc);
                 out.submissions += 1;
-                let bytes = map_read(gpu, &staging)?;
+                let bytes = map_read_async(gpu, &staging).await?;
                 let head: PoolHeader =
                     bytemuck::pod_read_unaligned(&bytes[..HEADER_BYTES as usize]);
                 if head.count_in == 0 {

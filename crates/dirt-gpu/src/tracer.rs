@@ -99,6 +99,21 @@ impl<'g> DirtGpu<'g> {
     /// wrapper of a frame build. Its one stage, `frame`, is the wall time of
     /// every submission it took (two when the lists outgrew the ids).
     fn build_in_frame(&mut self, tris: &[Triangle]) -> Result<BuildReport, GpuError> {
+        crate::block("a frame build", self.build_async(tris))
+    }
+
+    /// Builds over `tris` without blocking: the triangles uploaded and a
+    /// frame build recorded ([`DirtGpu::encode_build`]), submitted and
+    /// awaited until its feedback is in, again if its lists outgrew the ids.
+    /// The form a browser page awaits; natively it is what
+    /// [`Tracer::build`] does with [`DirtGpu::frame_builds`].
+    pub async fn build_async(&mut self, tris: &[Triangle]) -> Result<BuildReport, GpuError> {
+        let gpu = self.gpu;
+        gpu.scoped_async("a frame build", self.build_async_unscoped(tris))
+            .await
+    }
+
+    async fn build_async_unscoped(&mut self, tris: &[Triangle]) -> Result<BuildReport, GpuError> {
         u32::try_from(tris.len()).map_err(|_| {
             GpuError::Params(CoreError::InvalidParams(format!(
                 "{} triangles is more than 2^32-1",
@@ -134,9 +149,10 @@ impl<'g> DirtGpu<'g> {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             self.encode_build(&mut enc, &meshes)?;
             gpu.submit(enc);
-            gpu.wait()?;
             let Some(ads) = self.ads.as_ref() else { break };
-            let Some(fb) = ads.feedback() else { break };
+            let Some(fb) = ads.settle_feedback(gpu).await? else {
+                break;
+            };
             if let Some(index) = fb.non_finite {
                 self.ads = None;
                 return Err(GpuError::Params(CoreError::NonFiniteTriangle {
@@ -144,7 +160,7 @@ impl<'g> DirtGpu<'g> {
                 }));
             }
             if fb.entries_needed <= fb.capacity {
-                let memory = Some(ads.memory_bytes());
+                let memory = self.ads.as_ref().map(GpuAds::memory_bytes);
                 return Ok(BuildReport {
                     stages: vec![("frame", t0.elapsed())],
                     memory,
@@ -182,6 +198,32 @@ impl<'g> DirtGpu<'g> {
     }
 }
 
+impl DirtGpu<'_> {
+    /// Closest hits (and per-ray statistics when `with_stats`) of `rays`
+    /// without blocking: [`Tracer::trace_into`]'s form for a browser page,
+    /// whose read-backs resolve on its event loop.
+    pub async fn trace_async(
+        &mut self,
+        rays: &[Ray],
+        with_stats: bool,
+    ) -> Result<crate::trace::Traced, GpuError> {
+        let ads = self.ads.as_ref().ok_or_else(|| {
+            GpuError::Params(CoreError::NotBuilt {
+                tracer: "dirt-gpu".into(),
+            })
+        })?;
+        if rays.is_empty() {
+            return Ok(crate::trace::Traced::default());
+        }
+        let t = self
+            .resources
+            .trace_async(self.gpu, ads, rays, self.traversal, with_stats)
+            .await?;
+        self.rounds += t.rounds as u64;
+        Ok(t)
+    }
+}
+
 impl Tracer for DirtGpu<'_> {
     fn name(&self) -> String {
         format!("dirt-gpu ({})", self.traversal)
@@ -208,22 +250,20 @@ impl Tracer for DirtGpu<'_> {
         stats: Option<&mut [RayStats]>,
     ) -> Result<TraceReport, CoreError> {
         check_lengths(rays, hits, stats.as_deref())?;
-        let ads = self.ads.as_ref().ok_or_else(|| CoreError::NotBuilt {
-            tracer: self.name(),
-        })?;
+        if self.ads.is_none() {
+            return Err(CoreError::NotBuilt {
+                tracer: self.name(),
+            });
+        }
         if rays.is_empty() {
             return Ok(TraceReport::default());
         }
         let with_stats = stats.is_some();
-        let t = self
-            .resources
-            .trace_host(self.gpu, ads, rays, self.traversal, with_stats)
-            .map_err(CoreError::from)?;
+        let t = crate::block("the trace", self.trace_async(rays, with_stats))?;
         hits.copy_from_slice(&t.hits);
         if let Some(s) = stats {
             s.copy_from_slice(&t.stats);
         }
-        self.rounds += t.rounds as u64;
         Ok(TraceReport {
             continuation_rounds: t.rounds as usize,
             stats: with_stats,
