@@ -381,24 +381,6 @@ impl Gpu {
         out
     }
 
-    /// Waits for all submitted work without blocking a browser page:
-    /// natively [`Gpu::wait`]; in a browser the queue's work-done callback,
-    /// awaited.
-    pub async fn settle(&self) -> Result<(), GpuError> {
-        #[cfg(not(target_arch = "wasm32"))]
-        {
-            self.wait()
-        }
-        #[cfg(target_arch = "wasm32")]
-        {
-            let (tx, rx) = futures_channel::oneshot::channel();
-            self.queue.on_submitted_work_done(move || {
-                let _ = tx.send(());
-            });
-            rx.await.map_err(|e| GpuError::Device(e.to_string()))
-        }
-    }
-
     /// A wgpu error message as a [`GpuError`]: a lost device, or a validation error.
     pub(crate) fn classify(&self, what: &'static str, message: String) -> GpuError {
         // A poll runs the device-lost callback if the device is gone.

@@ -213,11 +213,6 @@ impl GpuAds {
         let Some(f) = self.frame.as_ref() else {
             return Ok(None);
         };
-        let (total, total_at) = self
-            .offsets
-            .locate(f.n_lists)
-            .ok_or_else(|| GpuError::Device("the list offsets have no total".into()))?;
-        // Both words in one copy and one read-back.
         let staging = buffer(
             gpu,
             "build feedback (awaited)",
@@ -225,9 +220,7 @@ impl GpuAds {
             wgpu::BufferUsages::MAP_READ | COPY_DST,
         );
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(total, total_at, &staging, 0, 4);
-        let bad_at = std::mem::offset_of!(FrameState, bad) as u64;
-        enc.copy_buffer_to_buffer(&f.state, bad_at, &staging, 4, 4);
+        f.copy_counts(&mut enc, &self.offsets, &staging)?;
         gpu.submit(enc);
         let bytes = crate::map_read_async(gpu, &staging).await?;
         let words = bytes
@@ -236,12 +229,7 @@ impl GpuAds {
         let [needed, bad]: [u32; 2] = bytemuck::pod_read_unaligned(words);
         f.shared.needed.store(needed as u64, Ordering::Release);
         f.shared.bad.store(bad, Ordering::Release);
-        let mut fb = self.feedback();
-        if let Some(fb) = fb.as_mut() {
-            fb.entries_needed = needed as u64;
-            fb.non_finite = (bad != 0).then(|| u32::MAX - bad);
-        }
-        Ok(fb)
+        Ok(self.feedback())
     }
 
     /// Records a build over `meshes` (their triangles in order, ids counted
@@ -439,6 +427,23 @@ impl GpuAds {
 }
 
 impl Frame {
+    /// Records copies of the list total (the offsets' last entry) and the
+    /// fault word into the first 8 bytes of `dst`: a build's feedback.
+    fn copy_counts(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        offsets: &Chunked,
+        dst: &wgpu::Buffer,
+    ) -> Result<(), GpuError> {
+        let (total, total_at) = offsets
+            .locate(self.n_lists)
+            .ok_or_else(|| GpuError::Device("the list offsets have no total".into()))?;
+        enc.copy_buffer_to_buffer(total, total_at, dst, 0, 4);
+        let bad_at = std::mem::offset_of!(FrameState, bad) as u64;
+        enc.copy_buffer_to_buffer(&self.state, bad_at, dst, 4, 4);
+        Ok(())
+    }
+
     /// Copies the list total and the fault word into a free read-back
     /// buffer, mapped when the submission completes; the callback records
     /// them in `shared`. Nothing waits for it.
@@ -449,9 +454,6 @@ impl Frame {
         offsets: &Chunked,
         capacity: u64,
     ) -> Result<(), GpuError> {
-        let (total, total_at) = offsets
-            .locate(self.n_lists)
-            .ok_or_else(|| GpuError::Device("the list offsets have no total".into()))?;
         let free = self
             .staging
             .iter()
@@ -469,10 +471,8 @@ impl Frame {
             self.staging.len() - 1
         });
         let (buf, busy) = self.staging[k].clone();
+        self.copy_counts(enc, offsets, &buf)?;
         busy.store(true, Ordering::Release);
-        enc.copy_buffer_to_buffer(total, total_at, &buf, 0, 4);
-        let bad_at = std::mem::offset_of!(FrameState, bad) as u64;
-        enc.copy_buffer_to_buffer(&self.state, bad_at, &buf, 4, 4);
         let shared = self.shared.clone();
         let mapped = buf.clone();
         enc.map_buffer_on_submit(&buf, wgpu::MapMode::Read, 0..8, move |r| {
