@@ -177,6 +177,34 @@ mod tests {
         assert_eq!(source("no_such_module"), None);
     }
 
+    /// The composed `trace` (every module it imports) writes `||` and `&&`
+    /// only where the right side must not run: the budget's `step()` and
+    /// `work()`. Elsewhere the eager `|` and `&`: each short-circuit operator
+    /// is a branch, and SwiftShader took ~400 s to compile the trace with them
+    /// (docs/ARCHITECTURE.md, "WGSL every compiler takes").
+    #[test]
+    fn trace_short_circuits_only_the_budget() {
+        let composed = compose("trace").unwrap();
+        let code = strip_comments(&composed.text);
+        let offending: Vec<String> = code
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| l.contains("||") || l.contains("&&"))
+            .filter(|(_, l)| !l.contains("step(") && !l.contains("work("))
+            .map(|(i, l)| {
+                let (module, line) = composed.locate(i as u32 + 1);
+                format!("{module}.wgsl:{line}: {}", l.trim())
+            })
+            .collect();
+        assert!(
+            offending.is_empty(),
+            "short-circuit operators: {offending:#?}"
+        );
+        // The check sees the operators it is about.
+        let budget = code.lines().filter(|l| l.contains("&& step(")).count();
+        assert!(budget >= 4, "the walk's loops: {budget}");
+    }
+
     #[test]
     fn selftest_is_an_entry_and_encode_is_a_module() {
         let e = entries();

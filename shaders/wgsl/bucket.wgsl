@@ -8,7 +8,7 @@ fn bucket_of(z: f32, zmin: f32, zmax: f32, buckets: u32) -> u32 {
     }
     let range = zmax - zmin;
     let x = (z - zmin) * f32(buckets);
-    if !(range > 0.0) || !(x > 0.0) {
+    if !(range > 0.0) | !(x > 0.0) {
         return 0u;
     }
     let last = buckets - 1u;
@@ -30,7 +30,7 @@ fn bucket_of(z: f32, zmin: f32, zmax: f32, buckets: u32) -> u32 {
 }
 
 fn bucket_floor_depth(k: u32, zmin: f32, zmax: f32, buckets: u32) -> f32 {
-    if k == 0u || buckets <= 1u {
+    if (k == 0u) | (buckets <= 1u) {
         // From a `let`: a constant -inf is refused by Tint (see f32_inf).
         let bits = 0xff800000u;
         return bitcast<f32>(bits);

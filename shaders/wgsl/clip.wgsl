@@ -191,11 +191,11 @@ fn polygon_clip(poly: ptr<function, Polygon>, h: HalfSpace, eps: f32) {
         let q = (*poly).v[(k + 1u) % n];
         let fp = hs_eval(h, p, eps);
         let fq = hs_eval(h, q, eps);
-        if fp >= 0.0 && m < MAX_POLY {
+        if (fp >= 0.0) & (m < MAX_POLY) {
             out[m] = p;
             m += 1u;
         }
-        if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
+        if ((fp >= 0.0) != (fq >= 0.0)) & (m < MAX_POLY) {
             let w = div_cr(fp, fp - fq);
             out[m] = vec3<f32>(p[0] + (q[0] - p[0]) * w, p[1] + (q[1] - p[1]) * w, p[2] + (q[2] - p[2]) * w);
             m += 1u;
@@ -280,7 +280,7 @@ fn polygon_tile_range(v: View, poly: Polygon) -> TileRange {
         yhi = fmax(yhi, y);
     }
     let last = v.tiles - 1u;
-    if !(xhi + delta >= 0.0 && yhi + delta >= 0.0 && xlo - delta <= f32(v.tiles) && ylo - delta <= f32(v.tiles)) {
+    if !((xhi + delta >= 0.0) & (yhi + delta >= 0.0) & (xlo - delta <= f32(v.tiles)) & (ylo - delta <= f32(v.tiles))) {
         return none;
     }
     return TileRange(true, floor_index(xlo - delta, last), floor_index(xhi + delta, last), floor_index(ylo - delta, last), floor_index(yhi + delta, last));

@@ -29,7 +29,7 @@ struct IndexRange {
 fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> IndexRange {
     let lo = fmin(a, b) - d;
     let hi = fmax(a, b) + d;
-    if !(hi >= 0.0 && lo < f32(tiles)) {
+    if !((hi >= 0.0) & (lo < f32(tiles))) {
         return IndexRange(false, 0u, 0u);
     }
     let last = tiles - 1u;

@@ -41,7 +41,7 @@ fn div_cr(a: f32, b: f32) -> f32 {
     let abs_b = ub & 0x7fffffffu;
 
     // Special operands: NaN, infinities, zeros.
-    if abs_a > DIV_INF || abs_b > DIV_INF {
+    if (abs_a > DIV_INF) | (abs_b > DIV_INF) {
         return div_qnan();
     }
     if abs_a == DIV_INF {
@@ -122,7 +122,7 @@ fn div_cr(a: f32, b: f32) -> f32 {
     let rem = q & ((1u << s) - 1u);
     let half = 1u << (s - 1u);
     // Round to nearest, ties to even (a tie with sticky bits is above half).
-    let up: u32 = select(0u, 1u, rem > half || (rem == half && (sticky || (mant & 1u) == 1u)));
+    let up: u32 = select(0u, 1u, (rem > half) | ((rem == half) & (sticky | ((mant & 1u) == 1u))));
     // The mantissa's hidden bit adds 1 to the exponent field, hence e - 1; a
     // subnormal has field 0 and no hidden bit. A rounding carry ripples into
     // the exponent (at the top, into +inf).

@@ -110,7 +110,7 @@ fn step(slot: u32, index: u32) -> bool {
     g_work += 1u;
     g_idx[slot] = index;
     if g_resume == NONE {
-        if g_progress && g_work > params.budget {
+        if g_progress & (g_work > params.budget) {
             g_fail = slot;
             return false;
         }
@@ -121,11 +121,11 @@ fn step(slot: u32, index: u32) -> bool {
 
 // Resuming: whether slot's loop continues at its saved index...
 fn resumes(slot: u32) -> bool {
-    return g_resume != NONE && g_resume >= slot;
+    return (g_resume != NONE) & (g_resume >= slot);
 }
 // ...inside an iteration already begun (inner loops were running).
 fn resumes_inside(slot: u32) -> bool {
-    return g_resume != NONE && g_resume > slot;
+    return (g_resume != NONE) & (g_resume > slot);
 }
 // The loop of the slot the walk stopped at begins its saved iteration afresh.
 fn resumed(slot: u32) {
@@ -167,7 +167,7 @@ fn visit_tile(v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
     let span = depth_span(vr, iv);
     let lo = span.x;
     let hi = span.y;
-    if !(hi >= zmin && lo <= zmax) {
+    if !((hi >= zmin) & (lo <= zmax)) {
         return;
     }
     let nb = params.buckets;
@@ -185,10 +185,12 @@ fn visit_tile(v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
         if !inside {
             if hit_is_hit(g_best) {
                 let zb = ray_depth(vr, g_best.t);
-                if ascending && bucket_floor_depth(k, zmin, zmax, nb) > zb + vr.eps {
-                    break;
-                }
-                if !ascending && bucket_ceil_depth(k, zmin, zmax, nb) < zb - vr.eps {
+                // Nested, not `&&`: only the edge the walk needs is computed.
+                if ascending {
+                    if bucket_floor_depth(k, zmin, zmax, nb) > zb + vr.eps {
+                        break;
+                    }
+                } else if bucket_ceil_depth(k, zmin, zmax, nb) < zb - vr.eps {
                     break;
                 }
             }
@@ -211,7 +213,7 @@ fn visit_tile(v: View, vr: ViewRay, i: u32, j: u32, iv: Interval) {
 
 // dirt_math::dda::walk_tiles with the visitor of dirt_cpu::trace::linear.
 fn linear(v: View, vr: ViewRay, iv: Interval) {
-    if is_empty(iv) || v.tiles == 0u {
+    if is_empty(iv) | (v.tiles == 0u) {
         return;
     }
     let a = tile_xy(v, vr, iv.t0);
@@ -241,7 +243,7 @@ fn linear(v: View, vr: ViewRay, iv: Interval) {
         clip_interval(&band, hs_lo(major, boundary(v, k)), vr);
         clip_interval(&band, hs_hi(major, boundary(v, k + 1u)), vr);
         if !is_empty(band) {
-            if !inside && band.t0 > g_best.t {
+            if !inside & (band.t0 > g_best.t) {
                 walking = false;
             } else {
                 let p = tile_xy(v, vr, band.t0);
@@ -282,7 +284,7 @@ fn unpack_cell(p: u32) -> vec3<u32> {
 
 fn cell_exists(c: vec3<u32>) -> bool {
     let w = g_level_width[c.x];
-    return c.y < w && c.z < w;
+    return (c.y < w) & (c.z < w);
 }
 
 // Child k (in child_order) of `c`'s parent: one of c's siblings or c.
@@ -382,17 +384,17 @@ fn hiz_walk(v: View, vr: ViewRay, iv: Interval) {
             let level = cell.x;
             let civ = hiz_cell_clip(v, vr, iv, level, cell.y, cell.z);
             var enter = inside;
-            if !inside && !(is_empty(civ) || civ.t0 > g_best.t) {
+            if !inside & !(is_empty(civ) | (civ.t0 > g_best.t)) {
                 let w = g_level_width[level];
                 let at = g_level_base[level] + v.slot * w * w + cell.z * w + cell.y;
                 let z = hiz_cell(at, params.hiz_shift);
                 let zmin = ordered_to_f32(z.x);
                 let zmax = ordered_to_f32(z.y);
                 let span = depth_span(vr, civ);
-                enter = span.y >= zmin && span.x <= zmax;
+                enter = (span.y >= zmin) & (span.x <= zmax);
             }
             inside = false;
-            if enter && level > 0u {
+            if enter & (level > 0u) {
                 cell = first_child(dir, cell);
             } else {
                 if enter {
@@ -456,11 +458,11 @@ fn finish(r: u32) {
 fn ray_is_valid(ray: Ray) -> bool {
     let o = ray.origin;
     let d = ray.dir;
-    let finite_o = abs(o[0]) <= F32_MAX && abs(o[1]) <= F32_MAX && abs(o[2]) <= F32_MAX;
-    let finite_d = abs(d[0]) <= F32_MAX && abs(d[1]) <= F32_MAX && abs(d[2]) <= F32_MAX;
-    let nonzero = !(d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0);
-    let range_ok = ray.tmin >= 0.0 && abs(ray.tmin) <= F32_MAX && !(ray.tmax < ray.tmin) && ray.tmax == ray.tmax;
-    return finite_o && finite_d && nonzero && range_ok;
+    let finite_o = (abs(o[0]) <= F32_MAX) & (abs(o[1]) <= F32_MAX) & (abs(o[2]) <= F32_MAX);
+    let finite_d = (abs(d[0]) <= F32_MAX) & (abs(d[1]) <= F32_MAX) & (abs(d[2]) <= F32_MAX);
+    let nonzero = !((d[0] == 0.0) & (d[1] == 0.0) & (d[2] == 0.0));
+    let range_ok = (ray.tmin >= 0.0) & (abs(ray.tmin) <= F32_MAX) & !(ray.tmax < ray.tmin) & (ray.tmax == ray.tmax);
+    return finite_o & finite_d & nonzero & range_ok;
 }
 
 // Traces ray `r` from the start or, `resuming`, from its saved state.
@@ -521,7 +523,7 @@ fn trace_ray(r: u32, resuming: bool) {
         if !inside {
             g_visited |= 1u << f;
         }
-        if inside || ivs[f].t0 <= g_best.t {
+        if inside | (ivs[f].t0 <= g_best.t) {
             if !inside {
                 g_stats.views += 1u;
             }
@@ -533,9 +535,9 @@ fn trace_ray(r: u32, resuming: bool) {
         }
         // Across the edge the ray leaves through, else the next view it enters.
         current = first_unvisited(&ivs, n, g_visited);
-        if exits[f] != NO_EXIT && n == 6u {
+        if (exits[f] != NO_EXIT) & (n == 6u) {
             let g = views[f].adjacency[exits[f]];
-            if (g_visited & (1u << g)) == 0u && !is_empty(ivs[g]) {
+            if ((g_visited & (1u << g)) == 0u) & !is_empty(ivs[g]) {
                 current = g;
             }
         }
@@ -602,7 +604,7 @@ fn first_unvisited(ivs: ptr<function, array<Interval, 6>>, n: u32, visited: u32)
     var best_t0 = 0.0;
     for (var f = 0u; f < n && work(); f++) {
         let iv = (*ivs)[f];
-        if (visited & (1u << f)) == 0u && !is_empty(iv) && (best == n || iv.t0 < best_t0) {
+        if ((visited & (1u << f)) == 0u) & !is_empty(iv) & ((best == n) | (iv.t0 < best_t0)) {
             best = f;
             best_t0 = iv.t0;
         }

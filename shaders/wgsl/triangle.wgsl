@@ -20,7 +20,7 @@ fn ray_shear(ray: Ray) -> RayShear {
     let ay = abs(d[1]);
     let az = abs(d[2]);
     var kz = 2u;
-    if ax >= ay && ax >= az {
+    if (ax >= ay) & (ax >= az) {
         kz = 0u;
     } else if ay >= az {
         kz = 1u;
@@ -94,11 +94,11 @@ fn intersect(ray: Ray, sh: RayShear, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
     let e0 = edge_function(cx, by, cy, bx);
     let e1 = edge_function(ax, cy, ay, cx);
     let e2 = edge_function(bx, ay, by, ax);
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+    if ((e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0)) & ((e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0)) {
         return miss;
     }
     let det = e0 + e1 + e2;
-    if det == 0.0 || det != det {
+    if (det == 0.0) | (det != det) {
         return miss;
     }
     let az = sh.sz * a[kz];
@@ -106,7 +106,7 @@ fn intersect(ray: Ray, sh: RayShear, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
     let cz = sh.sz * c[kz];
     let tt = e0 * az + e1 * bz + e2 * cz;
     let t = div_cr(tt, det);
-    if !(t >= ray.tmin && t <= ray.tmax) {
+    if !((t >= ray.tmin) & (t <= ray.tmax)) {
         return miss;
     }
     let u = div_cr(e1, det);
@@ -139,5 +139,5 @@ fn is_degenerate(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>) -> bool {
     let nx = edge_function(e[1], f[2], e[2], f[1]);
     let ny = edge_function(e[2], f[0], e[0], f[2]);
     let nz = edge_function(e[0], f[1], e[1], f[0]);
-    return nx == 0.0 && ny == 0.0 && nz == 0.0;
+    return (nx == 0.0) & (ny == 0.0) & (nz == 0.0);
 }

@@ -78,5 +78,5 @@ fn hit_is_hit(h: Hit) -> bool {
 
 // The deterministic order of the design brief §2: smaller t, then smaller id.
 fn hit_closer_than(a: Hit, b: Hit) -> bool {
-    return a.t < b.t || (a.t == b.t && a.prim < b.prim);
+    return (a.t < b.t) | ((a.t == b.t) & (a.prim < b.prim));
 }
