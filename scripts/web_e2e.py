@@ -94,6 +94,7 @@ def main():
     ap.add_argument("--size", default="96x72")
     ap.add_argument("--backend", default="gpu")
     ap.add_argument("--timeout", type=float, default=900)
+    ap.add_argument("--profile", help="Chromium's user data directory (default: OUT_DIR/chromium-profile)")
     ap.add_argument("--check", action="store_true",
                     help="also measure DIRT on the page's WebGPU against the CPU reference (dirt.check)")
     a = ap.parse_args()
@@ -124,7 +125,8 @@ def main():
             break
         except OSError:
             time.sleep(0.1)
-    profile = os.path.join(a.out, "chromium-profile")
+    # A profile shared with an earlier run keeps Chromium's cache of compiled shaders.
+    profile = a.profile or os.path.join(a.out, "chromium-profile")
     caps = {
         "capabilities": {
             "alwaysMatch": {
@@ -174,6 +176,8 @@ def main():
             sys.exit(f"FAIL: the page reports an error: {state['status']}")
         if state["samples"] < a.spp:
             sys.exit(f"FAIL: {state['samples']} of {a.spp} samples after {took:.0f} s")
+        if a.backend == "gpu" and "on WebGPU" not in state["status"]:
+            sys.exit(f"FAIL: asked for the GPU, the page says: {state['status']}")
         print(f"page: {state['samples']} samples in {took:.1f} s (page load, device, build and passes)")
         canvas = wd(base, "POST", s + "/element", {"using": "css selector", "value": "#view"})
         eid = next(iter(canvas.values()))
