@@ -25,6 +25,7 @@ pub mod cost;
 pub mod fill_depth;
 pub mod fill_primitives;
 pub mod grid;
+mod intersect_lanes;
 pub mod mip_depth;
 pub mod screen_space;
 pub mod trace;

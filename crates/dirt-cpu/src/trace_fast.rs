@@ -42,6 +42,10 @@
 //!   along the ray gives the same candidate each time, which the best hit
 //!   either already is or already beats, so skipping it changes no bit. With
 //!   statistics every listed triangle is tested, as the plain stage counts.
+//! - A bucket's triangles are tested [`LANES`] at a time
+//!   ([`intersect_closest_lanes`]: the edge functions of several triangles
+//!   side by side, each lane the scalar test's bits); the closest hit of a
+//!   list does not depend on the order its triangles are tested in.
 //! - Batches of [`ORDER_MIN_RAYS`] rays or more are traced in a coherent
 //!   order ([`coherent_order`]: direction face, then Morton code of the
 //!   origin); the results go back to input order.
@@ -53,6 +57,7 @@
 //! [`HiZCell::clip`]: dirt_math::dda::HiZCell::clip
 
 use crate::Ads;
+use crate::intersect_lanes::{LANES, intersect_closest_lanes};
 use dirt_core::{RayStats, Traversal};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
 use dirt_math::clip::{HalfSpace, Interval, ray_depth, view_frustum};
@@ -828,6 +833,9 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
                 self.stats.buckets += 1;
                 self.stats.tests += ids.len() as u32;
             }
+            // Tested LANES at a time; the rest of the list one by one.
+            let mut lanes = [0u32; LANES];
+            let mut n = 0;
             for &id in ids {
                 if !STATS {
                     let tag = u64::from(self.scratch.ray) << 32 | u64::from(id);
@@ -837,6 +845,14 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
                     }
                     *slot = tag;
                 }
+                lanes[n] = id;
+                n += 1;
+                if n == LANES {
+                    intersect_closest_lanes(self.ray, &self.sh, sc.tris, lanes, &mut best);
+                    n = 0;
+                }
+            }
+            for &id in &lanes[..n] {
                 intersect_closest(self.ray, &self.sh, &sc.tris[id as usize], id, &mut best);
             }
         }

@@ -130,6 +130,23 @@ pub fn intersect(ray: &Ray, sh: &RayShear, tri: &Triangle) -> Option<(f32, f32, 
     if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
         return None;
     }
+    finish(ray, sh, tri, [a, b, c], [e0, e1, e2])
+}
+
+/// The rest of [`intersect`] for a candidate whose edge functions `e` (of the
+/// vertices `abc` relative to the origin, before the shear) passed the sign
+/// test: the determinant, `t`, the barycentrics and the point check. Apart
+/// so that a lane-wise front (several triangles at once) can end in the same
+/// operations, and so the same bits.
+#[inline]
+pub fn finish(
+    ray: &Ray,
+    sh: &RayShear,
+    tri: &Triangle,
+    [a, b, c]: [[f32; 3]; 3],
+    [e0, e1, e2]: [f32; 3],
+) -> Option<(f32, f32, f32)> {
+    let kz = sh.kz;
     let det = e0 + e1 + e2;
     if det == 0.0 || det.is_nan() {
         return None;
