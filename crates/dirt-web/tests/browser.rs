@@ -39,7 +39,7 @@ fn the_cpu_reference_in_the_page_is_exact() {
 /// (views, every Hi-Z cell, every list) and hits (prim, `t`, `u`, `v` bits,
 /// statistics), and both against brute force. Measured on Chromium 156 /
 /// SwiftShader, both walks on both scenes: nothing differs (12 000 rays, 8
-/// structures). This run keeps 6 of the 8; any difference fails it, with
+/// structures). This run keeps cornell's 4; any difference fails it, with
 /// its first instance in words.
 #[wasm_bindgen_test]
 async fn webgpu_against_the_cpu_reference() {
@@ -49,40 +49,34 @@ async fn webgpu_against_the_cpu_reference() {
     console_log!("adapter: {} — {}", gpu.describe(), gpu.exactness);
     // Every setting asserts its own; the total says how much was compared.
     let (mut settings, mut compared) = (0, 0);
-    for name in ["cornell", "spheres"] {
-        let scene = dirt_scene::open(name).expect("scene");
-        let rays = probe_rays(&scene.triangles, 1500, 11);
-        for params in dirt_web::check_params() {
-            // Both walks on cornell; spheres' linear walk adds time, not coverage.
-            let walks: &[Traversal] = if name == "cornell" {
-                &[Traversal::Linear, Traversal::HiZ]
-            } else {
-                &[Traversal::HiZ]
-            };
-            for &traversal in walks {
-                let t0 = web_time::Instant::now();
-                let c = check(gpu, &scene.triangles, &rays, &params, traversal)
-                    .await
-                    .expect("check");
-                console_log!(
-                    "{name} {:?} r{} B{} {traversal} ({:?}): {}",
-                    params.views,
-                    params.resolution,
-                    params.buckets,
-                    t0.elapsed(),
-                    c.summary()
-                );
-                assert!(
-                    c.cpu_truth.is_empty(),
-                    "the CPU reference: {:?}",
-                    c.cpu_truth
-                );
-                assert!(c.structure.is_empty(), "structure: {:?}", c.structure);
-                assert!(c.gpu_cpu.is_empty(), "hits: {:?}", c.gpu_cpu);
-                assert!(c.gpu_truth.is_empty(), "brute force: {:?}", c.gpu_truth);
-                settings += 1;
-                compared += c.gpu_cpu.rays;
-            }
+    // Spheres passed too when measured (above); CI keeps cornell, for time.
+    let name = "cornell";
+    let scene = dirt_scene::open(name).expect("scene");
+    let rays = probe_rays(&scene.triangles, 1500, 11);
+    for params in dirt_web::check_params() {
+        for traversal in [Traversal::Linear, Traversal::HiZ] {
+            let t0 = web_time::Instant::now();
+            let c = check(gpu, &scene.triangles, &rays, &params, traversal)
+                .await
+                .expect("check");
+            console_log!(
+                "{name} {:?} r{} B{} {traversal} ({:?}): {}",
+                params.views,
+                params.resolution,
+                params.buckets,
+                t0.elapsed(),
+                c.summary()
+            );
+            assert!(
+                c.cpu_truth.is_empty(),
+                "the CPU reference: {:?}",
+                c.cpu_truth
+            );
+            assert!(c.structure.is_empty(), "structure: {:?}", c.structure);
+            assert!(c.gpu_cpu.is_empty(), "hits: {:?}", c.gpu_cpu);
+            assert!(c.gpu_truth.is_empty(), "brute force: {:?}", c.gpu_truth);
+            settings += 1;
+            compared += c.gpu_cpu.rays;
         }
     }
     console_log!("total: {compared} rays over {settings} settings, none differ from the CPU");
