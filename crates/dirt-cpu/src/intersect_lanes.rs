@@ -17,7 +17,7 @@
 //! [`intersect`]: dirt_math::triangle::intersect
 //! [`intersect_closest`]: dirt_math::triangle::intersect_closest
 
-use dirt_math::triangle::{RayShear, diff_of_products, finish};
+use dirt_math::triangle::{RayShear, diff_of_products, finish, keep_closest};
 use dirt_math::{Hit, Ray, Triangle};
 use std::array::from_fn;
 
@@ -90,17 +90,8 @@ pub(crate) fn intersect_closest_lanes(
         }
         let vertex = |p: &[L; 3]| -> [f32; 3] { from_fn(|axis| p[axis][k]) };
         let abc = [vertex(&a), vertex(&b), vertex(&c)];
-        if let Some((t, u, v)) = finish(ray, sh, tri[k], abc, [e0[k], e1[k], e2[k]]) {
-            let cand = Hit {
-                prim: ids[k],
-                t,
-                u,
-                v,
-            };
-            if cand.closer_than(best) {
-                *best = cand;
-            }
-        }
+        let hit = finish(ray, sh, tri[k], abc, [e0[k], e1[k], e2[k]]);
+        keep_closest(hit, ids[k], best);
     }
 }
 

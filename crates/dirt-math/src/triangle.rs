@@ -200,7 +200,14 @@ pub fn is_degenerate(tri: &Triangle) -> bool {
 /// deterministic order of §2 (smaller `t`, then smaller id).
 #[inline]
 pub fn intersect_closest(ray: &Ray, sh: &RayShear, tri: &Triangle, prim: u32, best: &mut Hit) {
-    if let Some((t, u, v)) = intersect(ray, sh, tri) {
+    keep_closest(intersect(ray, sh, tri), prim, best);
+}
+
+/// Keeps the hit `(t, u, v)` of triangle `prim`, if any, in `best` when it is
+/// closer: the second half of [`intersect_closest`], for tests made otherwise.
+#[inline]
+pub fn keep_closest(hit: Option<(f32, f32, f32)>, prim: u32, best: &mut Hit) {
+    if let Some((t, u, v)) = hit {
         let cand = Hit { prim, t, u, v };
         if cand.closer_than(best) {
             *best = cand;
