@@ -343,7 +343,7 @@ impl Gpu {
     /// resolves on the page's event loop, so there `f` runs without scopes
     /// (errors reach the handler) and only the async forms capture them
     /// ([`Gpu::scoped_async`]).
-    pub(crate) fn scoped<T>(
+    pub fn scoped<T>(
         &self,
         what: &'static str,
         f: impl FnOnce() -> Result<T, GpuError>,
@@ -397,8 +397,9 @@ impl Gpu {
         }
     }
 
-    /// Submits dirt's own commands (the host-slice wrappers and host builds).
-    pub(crate) fn submit(&self, enc: wgpu::CommandEncoder) {
+    /// Submits dirt's own commands (the host-slice wrappers, host builds and
+    /// the GPU renderer), counted in [`Gpu::host_syncs`].
+    pub fn submit(&self, enc: wgpu::CommandEncoder) {
         self.submits
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.queue.submit([enc.finish()]);

@@ -422,8 +422,9 @@ pub(crate) fn record_dispatch(
     pass.dispatch_workgroups(x, y, z);
 }
 
-/// Copies `size` bytes of `src` from `offset` back to the CPU (blocks; see [`block`]).
-pub(crate) fn read_back(
+/// Copies `size` bytes of `src` from `offset` back to the CPU (blocks; see
+/// `block`: in a browser, use the async form). `src` needs `COPY_SRC`.
+pub fn read_back(
     gpu: &Gpu,
     src: &wgpu::Buffer,
     offset: u64,
@@ -707,4 +708,20 @@ impl GpuAds {
         let ids = bytemuck::pod_collect_to_vec::<u8, u32>(&self.ids.read(gpu, total).await?);
         Ok(IdLists { offsets, ids })
     }
+}
+
+/// `shaders/wgsl/<stage>.wgsl` composed and compiled as plain WGSL (no bits
+/// promised: no NoContraction path): for passes of the crates above this
+/// one, such as the GPU renderer's shading.
+pub fn wgsl_module(gpu: &Gpu, stage: &'static str) -> Result<wgpu::ShaderModule, GpuError> {
+    let composed = dirt_shaders::compose(stage).map_err(|e| GpuError::Shader {
+        stage,
+        message: e.to_string(),
+    })?;
+    Ok(gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(stage),
+            source: wgpu::ShaderSource::Wgsl(composed.text.into()),
+        }))
 }

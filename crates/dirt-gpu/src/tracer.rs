@@ -172,6 +172,11 @@ impl<'g> DirtGpu<'g> {
         ))
     }
 
+    /// The device it runs on.
+    pub fn gpu(&self) -> &'g Gpu {
+        self.gpu
+    }
+
     /// The structure of the last build.
     pub fn ads(&self) -> Option<&GpuAds> {
         self.ads.as_ref()
