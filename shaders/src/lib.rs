@@ -59,6 +59,12 @@ pub const STAGES: [&str; 4] = ["fill_depth", "mip_depth", "fill_primitives", "tr
 /// `dirt_gpu::<stage>` carry the same names.
 pub const PREPARE_STAGES: [&str; 2] = ["gather", "views"];
 
+/// The stages of the GPU renderer (`dirt_render::gpu`), named after the CPU
+/// renderer's modules `dirt_render::<stage>`: `camera` (primary rays),
+/// `fetch`, `shade` (its steps one entry point each), `shift` and `accum`.
+/// The trace between them is [`STAGES`]' `trace`.
+pub const RENDER_STAGES: [&str; 5] = ["camera", "fetch", "shade", "shift", "accum"];
+
 /// The naga capabilities the shaders are validated against.
 ///
 /// Empty: the WebGPU baseline, so the same WGSL runs in a browser. Widen only
