@@ -185,6 +185,154 @@ fn shared_structs_match_their_wgsl() {
 }
 
 #[test]
+fn the_gpu_renderers_structs_match_their_wgsl() {
+    use dirt_render::gpu::types::{
+        LightGpu, MaterialGpu, PathGpu, RenderParams, RenderState, ShadowGpu, SurfaceGpu,
+        TextureGpu, TriGpu,
+    };
+    check(
+        "shade",
+        "RenderParams",
+        rust_layout!(RenderParams {
+            eye,
+            tan_half_fov,
+            forward,
+            ortho_half_height,
+            up,
+            orthographic,
+            right,
+            offset,
+            environment,
+            p_area,
+            seed_mix,
+            width,
+            height,
+            n_paths,
+            n_area,
+            n_punctual,
+            roulette_from,
+            n_tris,
+            n_materials,
+            pad0,
+            pad1
+        }),
+    );
+    check(
+        "shade",
+        "RenderState",
+        rust_layout!(RenderState {
+            sample,
+            bounce,
+            bad_hits,
+            rays,
+            rays_lo,
+            rays_hi,
+            pad0,
+            pad1
+        }),
+    );
+    check(
+        "shade",
+        "TriGpu",
+        rust_layout!(TriGpu {
+            p0,
+            light_prob,
+            p1,
+            material,
+            p2,
+            has_normals,
+            n0,
+            has_uvs,
+            n1,
+            pad0,
+            n2,
+            pad1,
+            uv0,
+            uv1,
+            uv2,
+            pad2
+        }),
+    );
+    check(
+        "fetch",
+        "MaterialGpu",
+        rust_layout!(MaterialGpu {
+            base,
+            metallic,
+            emissive,
+            roughness,
+            texture,
+            pad0,
+            pad1,
+            pad2
+        }),
+    );
+    check(
+        "fetch",
+        "TextureGpu",
+        rust_layout!(TextureGpu {
+            offset,
+            width,
+            height,
+            pad
+        }),
+    );
+    check(
+        "shade",
+        "LightGpu",
+        rust_layout!(LightGpu {
+            position,
+            kind,
+            direction,
+            range,
+            color,
+            cos_inner,
+            cos_outer,
+            prim,
+            area,
+            cdf
+        }),
+    );
+    check(
+        "shade",
+        "PathGpu",
+        rust_layout!(PathGpu {
+            throughput,
+            alive,
+            radiance,
+            pdf,
+            prev,
+            delta,
+            weight,
+            scattered,
+            dir,
+            pad
+        }),
+    );
+    check(
+        "shade",
+        "SurfaceGpu",
+        rust_layout!(SurfaceGpu {
+            p,
+            prim,
+            ng,
+            front,
+            ns,
+            metallic,
+            base,
+            roughness,
+            emission,
+            pad
+        }),
+    );
+    check(
+        "shade",
+        "ShadowGpu",
+        rust_layout!(ShadowGpu { contribution, aim }),
+    );
+}
+
+#[test]
 fn a_changed_field_is_caught() {
     // The check has teeth: a Rust layout with two fields swapped is rejected.
     let swapped = (vec![("prim", 4usize), ("t", 0)], 16);
@@ -206,5 +354,16 @@ fn each_stage_has_one_name_everywhere() {
             let p = root.join(dir).join(format!("{stage}.rs"));
             assert!(p.exists(), "{} is missing", p.display());
         }
+    }
+    // The GPU renderer's passes carry the names of the CPU renderer's stages.
+    for stage in dirt_shaders::RENDER_STAGES {
+        assert!(
+            dirt_shaders::source(stage).is_some(),
+            "shaders/wgsl/{stage}.wgsl is missing"
+        );
+        let p = root
+            .join("crates/dirt-render/src")
+            .join(format!("{stage}.rs"));
+        assert!(p.exists(), "{} is missing", p.display());
     }
 }

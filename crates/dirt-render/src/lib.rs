@@ -38,6 +38,7 @@ pub mod camera;
 pub mod direct_visibility;
 pub mod features;
 pub mod fetch;
+pub mod gpu;
 pub mod integrator;
 pub mod lights;
 pub mod metrics;
@@ -87,6 +88,9 @@ pub enum RenderError {
         width: u32,
         height: u32,
     },
+    /// What this build does not do (yet), in words.
+    #[error("not supported: {0}")]
+    Unsupported(String),
     #[error("images differ in size: {a:?} and {b:?}")]
     SizeMismatch { a: (u32, u32), b: (u32, u32) },
     #[error(transparent)]

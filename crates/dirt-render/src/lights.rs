@@ -123,6 +123,16 @@ impl Lights {
         }
     }
 
+    /// Cumulative power of [`Lights::area`], ending at 1.
+    pub fn cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
+    /// The probability of area light `prim` among the area lights (0 for a non-emitter).
+    pub fn prim_prob(&self, prim: u32) -> f32 {
+        self.prim_prob.get(prim as usize).copied().unwrap_or(0.0)
+    }
+
     pub fn is_empty(&self) -> bool {
         self.area.is_empty() && self.punctual.is_empty()
     }

@@ -23,6 +23,12 @@ fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The first step of [`Sampler::new`], shared by every pixel and sample of
+/// a render (the GPU renderer computes it once on the host).
+pub fn seed_mix(seed: u64) -> u64 {
+    mix64(seed ^ 0x9e37_79b9_7f4a_7c15)
+}
+
 /// The random numbers of one sample of one pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sampler {
@@ -31,7 +37,7 @@ pub struct Sampler {
 
 impl Sampler {
     pub fn new(seed: u64, pixel: u32, sample: u32) -> Self {
-        let a = mix64(seed ^ 0x9e37_79b9_7f4a_7c15);
+        let a = seed_mix(seed);
         Self {
             key: mix64(a ^ ((u64::from(pixel) << 32) | u64::from(sample))),
         }

@@ -521,3 +521,259 @@ fn an_awaited_sample_is_the_blocking_sample() {
         assert_eq!(awaited.rays, blocking.rays, "{mode:?}");
     }
 }
+
+// ---- The deferred path tracer on the GPU (`dirt_render::gpu`) ----
+
+mod on_gpu {
+    use super::*;
+    use dirt_gpu::{DirtGpu, Gpu};
+    use dirt_render::gpu::{GpuRenderer, TraceKind, TraceRecord, Transfers};
+
+    pub(super) fn render(
+        gpu: &Gpu,
+        scene: &Scene,
+        s: Settings,
+        inspect: Option<&mut dyn FnMut(TraceRecord)>,
+    ) -> (dirt_render::Rendered, Transfers) {
+        let camera = Camera::for_scene(scene, s.width as f32 / s.height as f32).expect("camera");
+        let r = Renderer::new(scene, camera, s).expect("renderer");
+        let tracer = DirtGpu::built(gpu, &scene.triangles, &AdsParams::default(), Traversal::HiZ)
+            .expect("dirt-gpu build");
+        let mut g = GpuRenderer::new(gpu, &r).expect("GPU renderer");
+        let out = g
+            .render_inspected(
+                tracer.ads().expect("built"),
+                Traversal::HiZ,
+                &mut |_| {},
+                inspect,
+            )
+            .expect("GPU render");
+        (out, g.transfers())
+    }
+
+    fn lit_cornell() -> Scene {
+        let mut sc = dirt_scene::open("cornell").expect("cornell");
+        sc.lights.push(Light {
+            name: "spot".into(),
+            kind: LightKind::Spot {
+                inner_cone: 0.3,
+                outer_cone: 0.6,
+            },
+            position: Vec3::new(0.0, 1.5, 0.5),
+            direction: Vec3::NEG_Y,
+            color: [1.0, 0.8, 0.6],
+            intensity: 2.0,
+            range: Some(5.0),
+        });
+        sc
+    }
+
+    /// Every trace the GPU renderer records — primary, shadow and scatter
+    /// rays, every bounce — returns the CPU structure's hits for the same
+    /// rays, bit for bit; the primary rays are the CPU renderer's to rounding
+    /// (the same random numbers: a jitter off by one number would move a ray
+    /// by up to a pixel).
+    #[test]
+    fn every_gpu_render_trace_equals_the_cpu_trace() {
+        let Some(gpu) = dirt_gpu::testing::exact_gpu("every_gpu_render_trace_equals_the_cpu_trace")
+        else {
+            return;
+        };
+        let scene = lit_cornell();
+        let s = settings(24, 16, 2, 3, Mode::Pt);
+        let mut cpu = DirtCpu::built(&scene.triangles, &AdsParams::default(), Traversal::HiZ)
+            .expect("dirt build");
+        let camera = Camera::for_scene(&scene, 1.5).expect("camera");
+        let reference = Renderer::new(&scene, camera, s).expect("renderer");
+        let mut records = Vec::new();
+        let mut keep = |r: TraceRecord| records.push(r);
+        render(gpu, &scene, s, Some(&mut keep));
+        let (mut shadow, mut scatter, mut hit) = (0usize, 0usize, 0usize);
+        for r in &records {
+            let hits = cpu.trace(&r.rays).expect("cpu trace");
+            for (k, (g, c)) in r.hits.iter().zip(&hits).enumerate() {
+                assert_eq!(
+                    g.bits(),
+                    c.bits(),
+                    "sample {} {:?} ray {k} {:?}",
+                    r.sample,
+                    r.kind,
+                    r.rays[k]
+                );
+            }
+            let valid = r.rays.iter().filter(|x| x.validate().is_ok()).count();
+            hit += r.hits.iter().filter(|h| h.is_hit()).count();
+            match r.kind {
+                TraceKind::Primary => {
+                    let cpu_rays = reference.primary_rays(r.sample);
+                    for (g, c) in r.rays.iter().zip(&cpu_rays) {
+                        assert_eq!(g.origin, c.origin);
+                        let d = (g.dir() - c.dir()).abs().max_element();
+                        assert!(d <= 1e-6, "primary ray {g:?} vs the CPU's {c:?}");
+                    }
+                }
+                TraceKind::Shadow { .. } => shadow += valid,
+                TraceKind::Scatter { .. } => scatter += valid,
+            }
+        }
+        // 2 samples × (1 primary + 3 bounces × (shadow + scatter)).
+        assert_eq!(records.len(), 14);
+        assert!(
+            shadow > 100 && scatter > 100 && hit > 1000,
+            "{shadow} {scatter} {hit}"
+        );
+    }
+    /// The GPU renderer's image of a scene with an area light, a spot and
+    /// glossy and textured materials agrees with the CPU renderer's at equal
+    /// samples far more closely than two CPU renders with different seeds
+    /// (which differ by the noise alone); one read-back per image.
+    #[test]
+    fn gpu_images_agree_with_the_cpu_renderer() {
+        let Some(gpu) = dirt_gpu::testing::any_gpu("gpu_images_agree_with_the_cpu_renderer") else {
+            return;
+        };
+        let mut scene = lit_cornell();
+        // A glossy metal and a mirror among the Lambertian walls.
+        for (k, m) in scene.materials.iter_mut().enumerate() {
+            if k % 3 == 1 && !m.is_emissive() {
+                m.metallic = 1.0;
+                m.roughness = if k % 2 == 0 { 0.0 } else { 0.4 };
+            }
+        }
+        let s = settings(32, 24, 8, 3, Mode::Pt);
+        let (g, transfers) = render(gpu, &scene, s, None);
+        let c = render_cpu(&scene, s).image;
+        let other_seed = render_cpu(&scene, Settings { seed: 8, ..s }).image;
+        let e = rmse(&g.image, &c).expect("size");
+        let noise = rmse(&other_seed, &c).expect("size");
+        eprintln!("GPU vs CPU RMSE {e:.5}; CPU seed 7 vs 8 {noise:.5}; {transfers:?}");
+        assert!(e < 0.1 * noise, "GPU vs CPU {e}, seed noise {noise}");
+        assert!(mean(&g.image) > 0.01);
+        assert_eq!(transfers.read_backs, 1);
+        assert_eq!(transfers.submissions, s.spp + 2);
+        assert_eq!(transfers.bytes_written, 8 * u64::from(s.spp));
+        assert!(
+            g.rays >= u64::from(s.width * s.height * s.spp),
+            "{}",
+            g.rays
+        );
+    }
+
+    /// The white furnace of the CPU test, rendered on the GPU, within the same tolerance.
+    #[test]
+    fn gpu_white_furnace_converges_to_the_analytic_radiance() {
+        let Some(gpu) =
+            dirt_gpu::testing::any_gpu("gpu_white_furnace_converges_to_the_analytic_radiance")
+        else {
+            return;
+        };
+        for (albedo, k, roulette, tol) in [(1.0f32, 3u32, None, 0.01), (0.8, 6, Some(2), 0.03)] {
+            let scene = furnace(albedo, 1.0);
+            let expected: f64 = (0..=k).map(|j| f64::from(albedo).powi(j as i32)).sum();
+            let s = Settings {
+                russian_roulette: roulette,
+                ..settings(16, 16, 32, k, Mode::Pt)
+            };
+            let m = mean(&render(gpu, &scene, s, None).0.image);
+            assert!(
+                (m - expected).abs() <= tol * expected,
+                "albedo {albedo}, K = {k}: mean {m}, expected {expected}"
+            );
+        }
+    }
+
+    /// Textures, punctual lights and emitters change the GPU image as they
+    /// change the CPU's: a red texture removes green and blue, a room without
+    /// emitters is black, a point light lights it more than a spot, a
+    /// directional light outside it lights nothing.
+    #[test]
+    fn gpu_renders_use_textures_and_lights() {
+        let Some(gpu) = dirt_gpu::testing::any_gpu("gpu_renders_use_textures_and_lights") else {
+            return;
+        };
+        let s = settings(16, 16, 2, 2, Mode::Pt);
+        let cornell = dirt_scene::open("cornell").expect("cornell");
+        assert!(mean(&render(gpu, &cornell, s, None).0.image) > 0.01);
+        let mut dark = cornell.clone();
+        for m in &mut dark.materials {
+            m.emissive = [0.0; 3];
+        }
+        assert_eq!(mean(&render(gpu, &dark, s, None).0.image), 0.0);
+        let light = |kind| Light {
+            name: String::new(),
+            kind,
+            position: Vec3::new(0.0, 1.8, 0.5),
+            direction: Vec3::NEG_Y,
+            color: [1.0, 1.0, 1.0],
+            intensity: 3.0,
+            range: None,
+        };
+        let mut means = Vec::new();
+        for kind in [
+            LightKind::Point,
+            LightKind::Spot {
+                inner_cone: 0.2,
+                outer_cone: 0.4,
+            },
+            LightKind::Directional,
+        ] {
+            let mut sc = dark.clone();
+            sc.lights.push(light(kind));
+            means.push(mean(&render(gpu, &sc, s, None).0.image));
+        }
+        assert!(means[0] > 0.001 && means[1] > 0.001, "{means:?}");
+        assert!(
+            means[1] < means[0],
+            "a spot lights less than a point: {means:?}"
+        );
+        assert_eq!(means[2], 0.0, "{means:?}");
+
+        let Some(boxed) = box_textured() else { return };
+        let tex = boxed
+            .materials
+            .iter()
+            .find_map(|m| m.base_color_texture)
+            .expect("a textured material") as usize;
+        let s = settings(32, 32, 2, 1, Mode::Direct);
+        let with = |rgba: [u8; 4]| {
+            let mut sc = boxed.clone();
+            let t = &sc.textures[tex];
+            sc.textures[tex] = Texture {
+                width: t.width,
+                height: t.height,
+                rgba8: rgba.repeat((t.width * t.height) as usize),
+            };
+            render(gpu, &sc, s, None).0.image
+        };
+        let original = render(gpu, &boxed, s, None).0.image;
+        let red = with([255, 0, 0, 255]);
+        let white = with([255, 255, 255, 255]);
+        let mut box_pixels = 0;
+        for (r, w) in red.pixels.iter().zip(&white.pixels) {
+            assert!(r[1] <= w[1] && r[2] <= w[2], "{r:?} {w:?}");
+            if r[1] < 0.05 * w[1] && r[2] < 0.05 * w[2] {
+                box_pixels += 1;
+            }
+        }
+        assert!(box_pixels > 100, "only {box_pixels} pixels see the box");
+        assert!(rmse(&original, &white).expect("size") > 0.01);
+        // The textured GPU image is the CPU's to rounding.
+        let cpu = render_cpu(&boxed, s).image;
+        assert!(rmse(&original, &cpu).expect("size") < 1e-3);
+    }
+
+    /// Ambient occlusion is refused with a reason, not rendered wrongly.
+    #[test]
+    fn gpu_renderer_refuses_what_it_does_not_do() {
+        let Some(gpu) = dirt_gpu::testing::any_gpu("gpu_renderer_refuses_what_it_does_not_do")
+        else {
+            return;
+        };
+        let scene = dirt_scene::open("cornell").expect("cornell");
+        let s = settings(8, 8, 1, 1, Mode::Ao);
+        let r = Renderer::new(&scene, Camera::for_scene(&scene, 1.0).expect("camera"), s)
+            .expect("renderer");
+        let e = GpuRenderer::new(gpu, &r).expect_err("AO on the GPU");
+        assert!(matches!(e, RenderError::Unsupported(_)), "{e}");
+    }
+}

@@ -1,0 +1,752 @@
+//! The deferred path tracer on the GPU (001 §4.2): this crate's stages as
+//! WGSL passes over a shading buffer that never leaves the GPU.
+//!
+//! One sample is one command encoder and one submission: `camera` writes the
+//! primary rays, then DIRT's `trace` (`dirt_gpu::TraceResources`, the same
+//! passes `DirtGpu` runs), `fetch`, and per bounce `shade`'s steps
+//! (`next_event`, the shadow trace, `apply_shadows`, `sample_scatter`, the
+//! trace, `fetch`, `scatter`) and `shift`; `accum` adds the sample to the
+//! image. The host writes 8 bytes before each sample (its number) and reads
+//! the image back once, at the end.
+//!
+//! Random numbers are the CPU renderer's bit for bit (`rng.wgsl`: integer
+//! arithmetic only) and the hits are DIRT's, which equal the CPU's bit for bit
+//! on an exact device; shading uses the GPU's `sqrt`, `sin`, `cos` and
+//! division, so images agree with the CPU renderer's to rounding (a path whose
+//! rounding flips a decision — a roulette draw, a ray grazing an edge — goes
+//! its own way), not to the bit.
+//!
+//! Left out, and said so by [`GpuRenderer::new`]'s errors: ambient occlusion
+//! (`Mode::Ao`) and the browser (the renderer waits for its one read-back).
+//! Paths keep their pixel's slot (no compaction): a path that has ended
+//! sends an invalid ray, which the trace misses at once.
+
+pub mod types;
+
+use crate::direct_visibility::VisibilityStats;
+use crate::{Image, Mode, RenderError, Rendered, Renderer};
+use dirt_core::Traversal;
+use dirt_gpu::wgpu::util::DeviceExt;
+use dirt_gpu::{Gpu, GpuAds, GpuError, TraceResources, wgpu};
+use dirt_math::{Hit, Ray, Vec3};
+use dirt_scene::LightKind;
+use std::time::Duration;
+use types::*;
+use web_time::Instant;
+
+/// Continuation rounds recorded after each trace's first dispatch: the
+/// renderer cannot look at the pool between traces, so it records enough
+/// for the walks of the scenes it was measured on; a ray still unfinished
+/// after them is counted and the render fails (nothing silently dropped).
+pub const TRACE_ROUNDS: u32 = 8;
+
+const STATE_BYTES: u64 = std::mem::size_of::<RenderState>() as u64;
+
+/// Which trace of a sample a [`TraceRecord`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TraceKind {
+    Primary,
+    Shadow { bounce: u32 },
+    Scatter { bounce: u32 },
+}
+
+/// One trace of the GPU renderer, read back (tests only: each costs a
+/// submission and a wait).
+#[derive(Clone, Debug)]
+pub struct TraceRecord {
+    pub sample: u32,
+    pub kind: TraceKind,
+    pub rays: Vec<Ray>,
+    pub hits: Vec<Hit>,
+}
+
+/// Host↔GPU traffic of a render, counted by the renderer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Transfers {
+    /// Command buffers submitted.
+    pub submissions: u32,
+    /// Buffers read back (each a wait for the GPU).
+    pub read_backs: u32,
+    /// Bytes written to the GPU after the scene was uploaded.
+    pub bytes_written: u64,
+    /// Bytes read back.
+    pub bytes_read: u64,
+}
+
+struct Pipelines {
+    camera: wgpu::ComputePipeline,
+    fetch: wgpu::ComputePipeline,
+    primary: wgpu::ComputePipeline,
+    next_event: wgpu::ComputePipeline,
+    apply_shadows: wgpu::ComputePipeline,
+    sample_scatter: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    shift: wgpu::ComputePipeline,
+    advance: wgpu::ComputePipeline,
+    tally: wgpu::ComputePipeline,
+    accumulate: wgpu::ComputePipeline,
+}
+
+fn pipeline(gpu: &Gpu, m: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
+    gpu.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: None,
+            module: m,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+}
+
+impl Pipelines {
+    fn new(gpu: &Gpu) -> Result<Self, GpuError> {
+        let camera = dirt_gpu::wgsl_module(gpu, "camera")?;
+        let fetch = dirt_gpu::wgsl_module(gpu, "fetch")?;
+        let shade = dirt_gpu::wgsl_module(gpu, "shade")?;
+        let shift = dirt_gpu::wgsl_module(gpu, "shift")?;
+        let accum = dirt_gpu::wgsl_module(gpu, "accum")?;
+        Ok(Self {
+            camera: pipeline(gpu, &camera, "camera"),
+            fetch: pipeline(gpu, &fetch, "fetch"),
+            primary: pipeline(gpu, &shade, "primary"),
+            next_event: pipeline(gpu, &shade, "next_event"),
+            apply_shadows: pipeline(gpu, &shade, "apply_shadows"),
+            sample_scatter: pipeline(gpu, &shade, "sample_scatter"),
+            scatter: pipeline(gpu, &shade, "scatter"),
+            shift: pipeline(gpu, &shift, "shift"),
+            advance: pipeline(gpu, &shift, "advance"),
+            tally: pipeline(gpu, &shift, "tally"),
+            accumulate: pipeline(gpu, &accum, "accumulate"),
+        })
+    }
+}
+
+/// A storage buffer holding `data`, or one zeroed element when it is empty
+/// (a binding cannot be empty).
+fn storage<T: bytemuck::Pod + Default>(
+    gpu: &Gpu,
+    label: &str,
+    data: &[T],
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let one = [T::default()];
+    let data = if data.is_empty() { &one[..] } else { data };
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(data),
+            usage: wgpu::BufferUsages::STORAGE | extra,
+        })
+}
+
+fn zeroed(gpu: &Gpu, label: &str, bytes: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(16),
+        usage: wgpu::BufferUsages::STORAGE | extra,
+        mapped_at_creation: false,
+    })
+}
+
+/// The scene as the passes read it.
+struct SceneBuffers {
+    tris: wgpu::Buffer,
+    materials: wgpu::Buffer,
+    textures: wgpu::Buffer,
+    texels: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    n_area: u32,
+    n_punctual: u32,
+    n_materials: u32,
+}
+
+fn tri_gpu(r: &Renderer<'_>) -> Vec<TriGpu> {
+    let s = r.scene;
+    s.triangles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let mut g = TriGpu {
+                p0: t.v[0],
+                p1: t.v[1],
+                p2: t.v[2],
+                light_prob: r.lights.prim_prob(i as u32),
+                material: s.tri_material.get(i).copied().unwrap_or(NO_PRIM),
+                ..TriGpu::default()
+            };
+            if let Some(n) = s.tri_normals.as_ref().and_then(|n| n.get(i)) {
+                g.has_normals = 1;
+                (g.n0, g.n1, g.n2) = (n[0], n[1], n[2]);
+            }
+            if let Some(uv) = s.tri_uvs.as_ref().and_then(|u| u.get(i)) {
+                g.has_uvs = 1;
+                (g.uv0, g.uv1, g.uv2) = (uv[0], uv[1], uv[2]);
+            }
+            g
+        })
+        .collect()
+}
+
+impl SceneBuffers {
+    fn new(gpu: &Gpu, r: &Renderer<'_>) -> Self {
+        let s = r.scene;
+        // The textures `fetch` decoded (the used ones), packed one after another.
+        let mut table = Vec::new();
+        let mut texels: Vec<[f32; 4]> = Vec::new();
+        let mut index = vec![NO_PRIM; r.fetcher.textures.len()];
+        for (k, t) in r.fetcher.textures.iter().enumerate() {
+            if let Some(t) = t {
+                index[k] = table.len() as u32;
+                table.push(TextureGpu {
+                    offset: texels.len() as u32,
+                    width: t.width,
+                    height: t.height,
+                    pad: 0,
+                });
+                texels.extend(t.texels.iter().map(|v| v.to_array()));
+            }
+        }
+        let materials: Vec<MaterialGpu> = s
+            .materials
+            .iter()
+            .map(|m| MaterialGpu {
+                base: [m.base_color[0], m.base_color[1], m.base_color[2]],
+                metallic: m.metallic,
+                emissive: m.emissive,
+                roughness: m.roughness,
+                texture: m
+                    .base_color_texture
+                    .and_then(|t| index.get(t as usize).copied())
+                    .unwrap_or(NO_PRIM),
+                ..MaterialGpu::default()
+            })
+            .collect();
+        let l = &r.lights;
+        let mut lights: Vec<LightGpu> = l
+            .area
+            .iter()
+            .zip(l.cdf())
+            .map(|(a, &cdf)| LightGpu {
+                kind: 0,
+                color: s
+                    .material_of(a.prim as usize)
+                    .map_or([0.0; 3], |m| m.emissive),
+                prim: a.prim,
+                area: a.area,
+                cdf,
+                ..LightGpu::default()
+            })
+            .collect();
+        lights.extend(l.punctual.iter().map(|p| {
+            let (kind, direction, cos_inner, cos_outer) = match p.kind {
+                LightKind::Point => (1, p.direction, 1.0, 1.0),
+                LightKind::Spot {
+                    inner_cone,
+                    outer_cone,
+                } => (
+                    2,
+                    p.direction.normalize_or(Vec3::NEG_Z),
+                    inner_cone.cos(),
+                    outer_cone.cos(),
+                ),
+                LightKind::Directional => (3, p.direction.normalize_or(Vec3::NEG_Y), 1.0, 1.0),
+            };
+            LightGpu {
+                position: p.position.to_array(),
+                kind,
+                direction: direction.to_array(),
+                range: p.range.filter(|r| *r > 0.0).unwrap_or(0.0),
+                color: (Vec3::from_array(p.color) * p.intensity).to_array(),
+                cos_inner,
+                cos_outer,
+                ..LightGpu::default()
+            }
+        }));
+        Self {
+            tris: storage(
+                gpu,
+                "render triangles",
+                &tri_gpu(r),
+                wgpu::BufferUsages::empty(),
+            ),
+            materials: storage(gpu, "materials", &materials, wgpu::BufferUsages::empty()),
+            textures: storage(gpu, "textures", &table, wgpu::BufferUsages::empty()),
+            texels: storage(gpu, "texels", &texels, wgpu::BufferUsages::empty()),
+            lights: storage(gpu, "lights", &lights, wgpu::BufferUsages::empty()),
+            n_area: l.area.len() as u32,
+            n_punctual: l.punctual.len() as u32,
+            n_materials: materials.len() as u32,
+        }
+    }
+}
+
+/// The bind groups of every pass (the buffers never change during a render).
+struct Binds {
+    camera: wgpu::BindGroup,
+    fetch_cur: wgpu::BindGroup,
+    fetch_next: wgpu::BindGroup,
+    primary: wgpu::BindGroup,
+    next_event: wgpu::BindGroup,
+    apply_shadows: wgpu::BindGroup,
+    sample_scatter: wgpu::BindGroup,
+    scatter: wgpu::BindGroup,
+    shift: wgpu::BindGroup,
+    advance: wgpu::BindGroup,
+    tally: wgpu::BindGroup,
+    accumulate: wgpu::BindGroup,
+}
+
+fn bind(gpu: &Gpu, p: &wgpu::ComputePipeline, entries: &[(u32, &wgpu::Buffer)]) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
+        .iter()
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &p.get_bind_group_layout(0),
+        entries: &entries,
+    })
+}
+
+/// The deferred path tracer on the GPU for one [`Renderer`] (scene, camera,
+/// settings): its buffers and pipelines, made once, reused by every
+/// [`GpuRenderer::render`].
+pub struct GpuRenderer<'g> {
+    gpu: &'g Gpu,
+    pipelines: Pipelines,
+    binds: Binds,
+    trace: TraceResources,
+    n: u32,
+    grid: [u32; 3],
+    bounces: u32,
+    has_lights: bool,
+    spp: u32,
+    width: u32,
+    height: u32,
+    state: wgpu::Buffer,
+    rays: wgpu::Buffer,
+    hits: wgpu::Buffer,
+    sum: wgpu::Buffer,
+    transfers: Transfers,
+}
+
+impl std::fmt::Debug for GpuRenderer<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuRenderer")
+            .field("paths", &self.n)
+            .field("bounces", &self.bounces)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'g> GpuRenderer<'g> {
+    /// Uploads `r`'s scene, lights and decoded textures and makes the
+    /// shading buffer for its image. `Mode::Ao` is not on the GPU yet
+    /// ([`RenderError::Unsupported`]).
+    pub fn new(gpu: &'g Gpu, r: &Renderer<'_>) -> Result<Self, RenderError> {
+        let s = &r.settings;
+        if s.mode == Mode::Ao {
+            return Err(RenderError::Unsupported(
+                "ambient occlusion is shaded on the host only (use --mode pt or direct on the GPU)"
+                    .into(),
+            ));
+        }
+        let n64 = u64::from(s.width) * u64::from(s.height);
+        let max_paths = TraceResources::max_rays(gpu).min(u32::MAX / 2);
+        let biggest = std::mem::size_of::<PathGpu>() as u64 * n64;
+        if n64 > u64::from(max_paths) || biggest > gpu.limits.max_storage_buffer_binding_size {
+            return Err(RenderError::Gpu(GpuError::TooLarge {
+                what: "the GPU renderer's shading buffer",
+                bytes: biggest,
+                limit: gpu.limits.max_storage_buffer_binding_size,
+            }));
+        }
+        let n = n64 as u32;
+        let (bounces, roulette_from) = match s.mode {
+            Mode::Direct => (1, None),
+            _ => (s.bounces, s.russian_roulette),
+        };
+        gpu.scoped("the GPU renderer's set-up", || {
+            let pipelines = Pipelines::new(gpu)?;
+            let scene = SceneBuffers::new(gpu, r);
+            let c = &r.camera;
+            let seed = crate::rng::seed_mix(s.seed);
+            let params = RenderParams {
+                eye: c.eye.to_array(),
+                tan_half_fov: c.tan_half_fov,
+                forward: c.forward.to_array(),
+                ortho_half_height: c.ortho_half_height.unwrap_or(0.0),
+                up: c.up.to_array(),
+                orthographic: c.ortho_half_height.is_some() as u32,
+                right: c.right.to_array(),
+                offset: r.offset,
+                environment: r.environment.to_array(),
+                p_area: r.lights.p_area,
+                seed_mix: [seed as u32, (seed >> 32) as u32],
+                width: s.width,
+                height: s.height,
+                n_paths: n,
+                n_area: scene.n_area,
+                n_punctual: scene.n_punctual,
+                roulette_from: roulette_from.unwrap_or(u32::MAX),
+                n_tris: r.scene.triangles.len() as u32,
+                n_materials: scene.n_materials,
+                pad0: 0,
+                pad1: 0,
+            };
+            let params = gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("render params"),
+                    contents: bytemuck::bytes_of(&params),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            let n64 = u64::from(n);
+            let copy = wgpu::BufferUsages::COPY_SRC;
+            let state = zeroed(
+                gpu,
+                "render state",
+                STATE_BYTES,
+                wgpu::BufferUsages::COPY_DST | copy,
+            );
+            let rays = zeroed(gpu, "render rays", n64 * 32, copy);
+            let hits = zeroed(gpu, "render hits", n64 * 16, copy);
+            let paths = zeroed(gpu, "paths", n64 * 80, copy);
+            let cur = zeroed(gpu, "G(k)", n64 * 80, copy);
+            let next = zeroed(gpu, "G(k+1)", n64 * 80, copy);
+            let shadows = zeroed(gpu, "shadows", n64 * 16, copy);
+            let sum = zeroed(
+                gpu,
+                "radiance sum",
+                n64 * 16,
+                copy | wgpu::BufferUsages::COPY_DST,
+            );
+            let p = &pipelines;
+            let sc = &scene;
+            let fetch = |out: &wgpu::Buffer| {
+                bind(
+                    gpu,
+                    &p.fetch,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (2, &rays),
+                        (3, &hits),
+                        (4, &sc.tris),
+                        (5, &sc.materials),
+                        (6, &sc.textures),
+                        (7, &sc.texels),
+                        (8, out),
+                    ],
+                )
+            };
+            let binds = Binds {
+                camera: bind(
+                    gpu,
+                    &p.camera,
+                    &[(0, &params), (1, &state), (2, &rays), (3, &paths)],
+                ),
+                fetch_cur: fetch(&cur),
+                fetch_next: fetch(&next),
+                primary: bind(gpu, &p.primary, &[(0, &params), (2, &paths), (3, &cur)]),
+                next_event: bind(
+                    gpu,
+                    &p.next_event,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (2, &paths),
+                        (3, &cur),
+                        (5, &sc.tris),
+                        (6, &sc.lights),
+                        (7, &rays),
+                        (8, &shadows),
+                    ],
+                ),
+                apply_shadows: bind(
+                    gpu,
+                    &p.apply_shadows,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (2, &paths),
+                        (8, &shadows),
+                        (9, &hits),
+                    ],
+                ),
+                sample_scatter: bind(
+                    gpu,
+                    &p.sample_scatter,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (2, &paths),
+                        (3, &cur),
+                        (7, &rays),
+                    ],
+                ),
+                scatter: bind(
+                    gpu,
+                    &p.scatter,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (2, &paths),
+                        (3, &cur),
+                        (4, &next),
+                        (5, &sc.tris),
+                    ],
+                ),
+                shift: bind(
+                    gpu,
+                    &p.shift,
+                    &[(0, &params), (2, &paths), (3, &cur), (4, &next)],
+                ),
+                advance: bind(gpu, &p.advance, &[(1, &state)]),
+                tally: bind(gpu, &p.tally, &[(1, &state)]),
+                accumulate: bind(gpu, &p.accumulate, &[(0, &params), (1, &paths), (2, &sum)]),
+            };
+            let groups = n.div_ceil(64);
+            let x = groups.clamp(1, gpu.limits.max_compute_workgroups_per_dimension);
+            let mut trace = TraceResources::new(gpu);
+            trace.rounds = TRACE_ROUNDS;
+            Ok(Self {
+                gpu,
+                pipelines,
+                binds,
+                trace,
+                n,
+                grid: [x, groups.div_ceil(x), 1],
+                bounces,
+                has_lights: !r.lights.is_empty(),
+                spp: s.spp,
+                width: s.width,
+                height: s.height,
+                state,
+                rays,
+                hits,
+                sum,
+                transfers: Transfers::default(),
+            })
+        })
+        .map_err(RenderError::from)
+    }
+
+    /// What this renderer has submitted and read back so far.
+    pub fn transfers(&self) -> Transfers {
+        self.transfers
+    }
+
+    fn dispatch(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        p: &wgpu::ComputePipeline,
+        b: &wgpu::BindGroup,
+        grid: [u32; 3],
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: None,
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(p);
+        pass.set_bind_group(0, b, &[]);
+        pass.dispatch_workgroups(grid[0], grid[1], grid[2]);
+    }
+
+    fn submit(&mut self, enc: wgpu::CommandEncoder) {
+        self.gpu.submit(enc);
+        self.transfers.submissions += 1;
+    }
+
+    fn read(&mut self, buf: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+        self.transfers.read_backs += 1;
+        self.transfers.bytes_read += bytes;
+        dirt_gpu::read_back(self.gpu, buf, 0, bytes)
+    }
+
+    /// Records the trace of the ray buffer into the hit buffer; with
+    /// `inspect`, submits what is recorded so far and reads both back.
+    #[allow(clippy::too_many_arguments)]
+    fn trace(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        ads: &GpuAds,
+        traversal: Traversal,
+        sample: u32,
+        kind: TraceKind,
+        inspect: &mut Option<&mut dyn FnMut(TraceRecord)>,
+    ) -> Result<(), RenderError> {
+        self.trace.encode_trace(
+            self.gpu, enc, ads, &self.rays, &self.hits, None, self.n, traversal,
+        )?;
+        if let Some(f) = inspect.as_mut() {
+            let done = std::mem::replace(
+                enc,
+                self.gpu.device.create_command_encoder(&Default::default()),
+            );
+            self.submit(done);
+            let n = u64::from(self.n);
+            let rays = bytemuck::pod_collect_to_vec(&self.read(&self.rays.clone(), n * 32)?);
+            let hits = bytemuck::pod_collect_to_vec(&self.read(&self.hits.clone(), n * 16)?);
+            f(TraceRecord {
+                sample,
+                kind,
+                rays,
+                hits,
+            });
+        }
+        Ok(())
+    }
+
+    /// Records and submits sample `sample` of every pixel.
+    fn sample(
+        &mut self,
+        ads: &GpuAds,
+        traversal: Traversal,
+        sample: u32,
+        inspect: &mut Option<&mut dyn FnMut(TraceRecord)>,
+    ) -> Result<(), RenderError> {
+        self.gpu
+            .queue
+            .write_buffer(&self.state, 0, bytemuck::cast_slice(&[sample, 0u32]));
+        self.transfers.bytes_written += 8;
+        let mut enc = self.gpu.device.create_command_encoder(&Default::default());
+        let (p, b, g) = (&self.pipelines, &self.binds, self.grid);
+        self.dispatch(&mut enc, &p.camera, &b.camera, g);
+        self.trace(
+            &mut enc,
+            ads,
+            traversal,
+            sample,
+            TraceKind::Primary,
+            inspect,
+        )?;
+        let (p, b) = (&self.pipelines, &self.binds);
+        self.dispatch(&mut enc, &p.fetch, &b.fetch_cur, g);
+        self.dispatch(&mut enc, &p.primary, &b.primary, g);
+        for bounce in 1..=self.bounces {
+            let (p, b) = (&self.pipelines, &self.binds);
+            self.dispatch(&mut enc, &p.advance, &b.advance, [1, 1, 1]);
+            if self.has_lights {
+                self.dispatch(&mut enc, &p.next_event, &b.next_event, g);
+                self.trace(
+                    &mut enc,
+                    ads,
+                    traversal,
+                    sample,
+                    TraceKind::Shadow { bounce },
+                    inspect,
+                )?;
+                let (p, b) = (&self.pipelines, &self.binds);
+                self.dispatch(&mut enc, &p.apply_shadows, &b.apply_shadows, g);
+            }
+            let (p, b) = (&self.pipelines, &self.binds);
+            self.dispatch(&mut enc, &p.sample_scatter, &b.sample_scatter, g);
+            self.trace(
+                &mut enc,
+                ads,
+                traversal,
+                sample,
+                TraceKind::Scatter { bounce },
+                inspect,
+            )?;
+            let (p, b) = (&self.pipelines, &self.binds);
+            self.dispatch(&mut enc, &p.fetch, &b.fetch_next, g);
+            self.dispatch(&mut enc, &p.scatter, &b.scatter, g);
+            self.dispatch(&mut enc, &p.shift, &b.shift, g);
+        }
+        let (p, b) = (&self.pipelines, &self.binds);
+        self.dispatch(&mut enc, &p.accumulate, &b.accumulate, g);
+        self.dispatch(&mut enc, &p.tally, &b.tally, [1, 1, 1]);
+        self.submit(enc);
+        Ok(())
+    }
+
+    /// Renders every sample through `ads` (built from the renderer's
+    /// triangles) and reads the image back once. `progress` is called after
+    /// each sample is submitted (not finished: the GPU runs ahead).
+    pub fn render(
+        &mut self,
+        ads: &GpuAds,
+        traversal: Traversal,
+        progress: &mut dyn FnMut(&crate::Progress),
+    ) -> Result<Rendered, RenderError> {
+        self.render_inspected(ads, traversal, progress, None)
+    }
+
+    /// [`GpuRenderer::render`], handing every trace's rays and hits to
+    /// `inspect` (read back per trace: for tests).
+    pub fn render_inspected(
+        &mut self,
+        ads: &GpuAds,
+        traversal: Traversal,
+        progress: &mut dyn FnMut(&crate::Progress),
+        mut inspect: Option<&mut dyn FnMut(TraceRecord)>,
+    ) -> Result<Rendered, RenderError> {
+        let start = Instant::now();
+        let gpu = self.gpu;
+        gpu.scoped("the GPU render", || {
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            enc.clear_buffer(&self.sum, 0, None);
+            enc.clear_buffer(&self.state, 0, None);
+            self.submit(enc);
+            for sample in 0..self.spp {
+                self.sample(ads, traversal, sample, &mut inspect)
+                    .map_err(|e| match e {
+                        RenderError::Gpu(g) => g,
+                        other => GpuError::Device(other.to_string()),
+                    })?;
+                progress(&crate::Progress {
+                    samples_done: sample + 1,
+                    spp: self.spp,
+                    rays: 0,
+                    elapsed: start.elapsed(),
+                });
+            }
+            Ok(())
+        })?;
+        // One read-back: the image's sums and the counters behind them.
+        let n = u64::from(self.n);
+        let staging = zeroed(
+            gpu,
+            "render result",
+            n * 16 + STATE_BYTES,
+            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&self.sum, 0, &staging, 0, n * 16);
+        enc.copy_buffer_to_buffer(&self.state, 0, &staging, n * 16, STATE_BYTES);
+        self.submit(enc);
+        let bytes = self.read(&staging, n * 16 + STATE_BYTES)?;
+        let (sums, state) = bytes.split_at(n as usize * 16);
+        let state: RenderState = bytemuck::pod_read_unaligned(&state[..STATE_BYTES as usize]);
+        if state.bad_hits > 0 {
+            return Err(RenderError::Gpu(GpuError::Device(format!(
+                "{} hits of the render were not finished walks ({TRACE_ROUNDS} continuation rounds per trace were not enough, or a frame structure was full): the image would be wrong",
+                state.bad_hits
+            ))));
+        }
+        let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(sums);
+        let inv = 1.0 / self.spp as f32;
+        let image = Image {
+            width: self.width,
+            height: self.height,
+            pixels: sums
+                .iter()
+                .map(|s| (Vec3::new(s[0], s[1], s[2]) * inv).to_array())
+                .collect(),
+        };
+        Ok(Rendered {
+            image,
+            rays: u64::from(state.rays_lo) | (u64::from(state.rays_hi) << 32),
+            visibility: VisibilityStats::default(),
+            trace_time: Duration::ZERO,
+            elapsed: start.elapsed(),
+            tracer: format!("dirt-gpu ({traversal}), shaded on the GPU"),
+        })
+    }
+}
