@@ -67,6 +67,11 @@ pub struct RenderArgs {
     /// is one, else DIRT on the CPU.
     #[arg(long, value_enum, default_value_t = RenderBackend::Auto)]
     backend: RenderBackend,
+    /// With DIRT on the GPU: shade on the host (the CPU renderer, one
+    /// round trip per trace) instead of on the GPU. Ambient occlusion is
+    /// always shaded on the host.
+    #[arg(long)]
+    host_shading: bool,
     /// How DIRT walks the tiles a ray crosses.
     #[arg(long, value_enum, default_value_t = Traversal::default())]
     traversal: Traversal,
@@ -100,6 +105,47 @@ enum RenderBackend {
     Reference,
     /// Every ray against every triangle.
     Brute,
+}
+
+/// The tracer of a render: DIRT on the GPU is kept by its type, so that the
+/// image can be shaded on the GPU too (`dirt_render::gpu`).
+enum RenderTracer<'g> {
+    Gpu(Box<DirtGpu<'g>>),
+    Other(Box<dyn Tracer + 'g>),
+}
+
+impl RenderTracer<'_> {
+    fn as_tracer(&mut self) -> &mut dyn Tracer {
+        match self {
+            RenderTracer::Gpu(t) => t.as_mut(),
+            RenderTracer::Other(t) => t.as_mut(),
+        }
+    }
+}
+
+/// Renders every sample: on the GPU when the tracer is DIRT on the GPU and
+/// the mode is shaded there (`shade_on_gpu`), else through the CPU renderer.
+fn render_image(
+    renderer: &Renderer,
+    tracer: &mut RenderTracer,
+    shade_on_gpu: bool,
+    progress: &mut dyn FnMut(&dirt_render::Progress),
+) -> Result<dirt_render::Rendered> {
+    if let (RenderTracer::Gpu(t), true) = (&mut *tracer, shade_on_gpu) {
+        let gpu = t.gpu();
+        let traversal = t.traversal;
+        let ads = t.ads().context("DIRT on the GPU is not built")?;
+        let mut g = dirt_render::gpu::GpuRenderer::new(gpu, renderer)
+            .context("cannot set up the GPU renderer")?;
+        let rendered = g.render(ads, traversal, progress)?;
+        let x = g.transfers();
+        eprintln!(
+            "shaded on the GPU: {} submissions, {} read-back ({} bytes), {} bytes written after the upload",
+            x.submissions, x.read_backs, x.bytes_read, x.bytes_written
+        );
+        return Ok(rendered);
+    }
+    Ok(renderer.render(tracer.as_tracer(), progress)?)
 }
 
 /// The camera: the scene's (or a framing), with the command line's overrides.
@@ -271,15 +317,15 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let mut kept = None;
     let traversal = args.traversal;
     let build = std::time::Instant::now();
-    let mut tracer: Box<dyn Tracer + '_> = {
+    let mut tracer: RenderTracer<'_> = {
         let tris = &scene.scene.triangles;
         match (args.backend, &gpu) {
-            (RenderBackend::Auto | RenderBackend::Gpu, Some(g)) => Box::new(
+            (RenderBackend::Auto | RenderBackend::Gpu, Some(g)) => RenderTracer::Gpu(Box::new(
                 DirtGpu::built(g, tris, &params, traversal)
                     .with_context(|| format!("cannot build DIRT on the GPU ({params:?})"))?,
-            ),
+            )),
             (RenderBackend::Auto | RenderBackend::Gpu | RenderBackend::Cpu, _) => {
-                Box::new(match chosen.take() {
+                RenderTracer::Other(Box::new(match chosen.take() {
                     // The structure the cost model built while choosing.
                     Some(ads) => {
                         kept = Some(ads.timings.total());
@@ -287,12 +333,17 @@ pub fn render(args: &RenderArgs) -> Result<()> {
                     }
                     None => DirtCpu::built(tris, &params, traversal)
                         .with_context(|| format!("cannot build DIRT ({params:?})"))?,
-                })
+                }))
             }
-            (RenderBackend::Reference, _) => Box::new(Reference::new(tris)),
-            (RenderBackend::Brute, _) => Box::new(Brute::new(tris)),
+            (RenderBackend::Reference, _) => RenderTracer::Other(Box::new(Reference::new(tris))),
+            (RenderBackend::Brute, _) => RenderTracer::Other(Box::new(Brute::new(tris))),
         }
     };
+    let shade_on_gpu = matches!(tracer, RenderTracer::Gpu(_)) && !args.host_shading;
+    if shade_on_gpu && settings.mode == Mode::Ao {
+        eprintln!("ambient occlusion is shaded on the host: the GPU traces, the CPU shades");
+    }
+    let shade_on_gpu = shade_on_gpu && settings.mode != Mode::Ao;
     let first_build = kept.unwrap_or_else(|| build.elapsed());
     eprintln!(
         "scene {}: {} triangles; {}x{}, {} spp, {} bounces, mode {:?}; tracer {} ({})",
@@ -303,7 +354,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         settings.spp,
         settings.bounces,
         settings.mode,
-        tracer.name(),
+        tracer.as_tracer().name(),
         match kept {
             Some(t) => format!(
                 "built in {:.1} ms while the cost model chose, and kept",
@@ -327,7 +378,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         return render_one(
             args,
             &renderer,
-            tracer.as_mut(),
+            &mut tracer,
+            shade_on_gpu,
             &args.out,
             args.exr.as_deref(),
         );
@@ -347,6 +399,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             scene.pose(t)?;
             let b = std::time::Instant::now();
             tracer
+                .as_tracer()
                 .build(&scene.scene.triangles)
                 .with_context(|| format!("cannot rebuild DIRT for frame {n}"))?;
             b.elapsed().as_secs_f64() * 1e3
@@ -367,7 +420,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             .map(|e| frame_path(e, Some(n)).unwrap_or_else(|| e.clone()));
         let rendered = render_quiet(
             &renderer,
-            tracer.as_mut(),
+            &mut tracer,
+            shade_on_gpu,
             &out,
             exr.as_deref(),
             args.exposure,
@@ -405,12 +459,13 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 /// Renders one frame without a progress bar, writes it, and returns it.
 fn render_quiet(
     renderer: &Renderer,
-    tracer: &mut dyn Tracer,
+    tracer: &mut RenderTracer,
+    shade_on_gpu: bool,
     out: &Path,
     exr: Option<&Path>,
     exposure: f32,
 ) -> Result<dirt_render::Rendered> {
-    let rendered = renderer.render(tracer, &mut |_| {})?;
+    let rendered = render_image(renderer, tracer, shade_on_gpu, &mut |_| {})?;
     write_images(&rendered, out, exr, exposure)?;
     Ok(rendered)
 }
@@ -469,7 +524,8 @@ fn write_gif(path: &Path, frames: &[Vec<u8>], width: u32, height: u32, fps: f32)
 fn render_one(
     args: &RenderArgs,
     renderer: &Renderer,
-    tracer: &mut dyn Tracer,
+    tracer: &mut RenderTracer,
+    shade_on_gpu: bool,
     out: &Path,
     exr: Option<&Path>,
 ) -> Result<()> {
@@ -486,7 +542,7 @@ fn render_one(
         )
         .context("progress template")?,
     );
-    let rendered = renderer.render(tracer, &mut |p| {
+    let rendered = render_image(renderer, tracer, shade_on_gpu, &mut |p| {
         let secs = p.elapsed.as_secs_f64();
         let mrays = if secs > 0.0 {
             p.rays as f64 / secs / 1e6
