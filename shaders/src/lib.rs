@@ -61,9 +61,17 @@ pub const PREPARE_STAGES: [&str; 2] = ["gather", "views"];
 
 /// The stages of the GPU renderer (`dirt_render::gpu`), named after the CPU
 /// renderer's modules `dirt_render::<stage>`: `camera` (primary rays),
-/// `fetch`, `shade` (its steps one entry point each), `shift` and `accum`.
-/// The trace between them is [`STAGES`]' `trace`.
-pub const RENDER_STAGES: [&str; 5] = ["camera", "fetch", "shade", "shift", "accum"];
+/// `direct_visibility` (the rasterised candidates confirmed around the
+/// primary trace), `fetch`, `shade` (its steps one entry point each), `shift`
+/// and `accum`. The trace between them is [`STAGES`]' `trace`.
+pub const RENDER_STAGES: [&str; 6] = [
+    "camera",
+    "direct_visibility",
+    "fetch",
+    "shade",
+    "shift",
+    "accum",
+];
 
 /// The naga capabilities the shaders are validated against.
 ///

@@ -50,8 +50,12 @@ struct RenderState {
     rays: atomic<u32>,
     rays_lo: u32,
     rays_hi: u32,
+    // Primary rays whose rasterised candidate `direct_visibility` confirmed
+    // this sample; `tally` adds them to (confirmed_lo, confirmed_hi).
+    confirmed: atomic<u32>,
+    confirmed_lo: u32,
+    confirmed_hi: u32,
     pad0: u32,
-    pad1: u32,
 }
 
 // A triangle with everything fetch and the lights read (128 bytes).

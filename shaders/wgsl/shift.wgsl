@@ -29,11 +29,15 @@ fn advance() {
     state.bounce += 1u;
 }
 
-// After a sample: its ray count joins the 64-bit total.
+// After a sample: its ray count and confirmed candidates join the 64-bit totals.
 @compute @workgroup_size(1)
 fn tally() {
     let r = atomicExchange(&state.rays, 0u);
     let lo = state.rays_lo + r;
     state.rays_hi += select(0u, 1u, lo < r);
     state.rays_lo = lo;
+    let c = atomicExchange(&state.confirmed, 0u);
+    let clo = state.confirmed_lo + c;
+    state.confirmed_hi += select(0u, 1u, clo < c);
+    state.confirmed_lo = clo;
 }

@@ -227,8 +227,10 @@ fn the_gpu_renderers_structs_match_their_wgsl() {
             rays,
             rays_lo,
             rays_hi,
-            pad0,
-            pad1
+            confirmed,
+            confirmed_lo,
+            confirmed_hi,
+            pad0
         }),
     );
     check(

@@ -725,3 +725,17 @@ pub fn wgsl_module(gpu: &Gpu, stage: &'static str) -> Result<wgpu::ShaderModule,
             source: wgpu::ShaderSource::Wgsl(composed.text.into()),
         }))
 }
+
+/// Compute pipelines of `entries` of `shaders/wgsl/<stage>.wgsl`, sharing one
+/// layout (one bind group serves them all), compiled as DIRT's own passes
+/// are: with NoContraction where [`Gpu::exact`] holds, so that arithmetic
+/// which must equal the CPU's bit for bit (an exact ray/triangle test in a
+/// crate above this one) does.
+pub fn exact_compute_pipelines(
+    gpu: &Gpu,
+    stage: &'static str,
+    entries: &[&str],
+) -> Result<Vec<wgpu::ComputePipeline>, GpuError> {
+    let st = spirv::compile(&gpu.device, stage, gpu.exact, dirt_shaders::Chunks::ONE)?;
+    compute_sharing(&gpu.device, &st, entries)
+}

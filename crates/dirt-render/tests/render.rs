@@ -572,7 +572,9 @@ mod on_gpu {
     /// rays, every bounce — returns the CPU structure's hits for the same
     /// rays, bit for bit; the primary rays are the CPU renderer's to rounding
     /// (the same random numbers: a jitter off by one number would move a ray
-    /// by up to a pixel).
+    /// by up to a pixel). The primary trace ran limited by the confirmed
+    /// rasterised candidates (`direct_visibility`), and its rays are handed
+    /// back at full length.
     #[test]
     fn every_gpu_render_trace_equals_the_cpu_trace() {
         let Some(gpu) = dirt_gpu::testing::exact_gpu("every_gpu_render_trace_equals_the_cpu_trace")
@@ -587,7 +589,19 @@ mod on_gpu {
         let reference = Renderer::new(&scene, camera, s).expect("renderer");
         let mut records = Vec::new();
         let mut keep = |r: TraceRecord| records.push(r);
-        render(gpu, &scene, s, Some(&mut keep));
+        let (out, _) = render(gpu, &scene, s, Some(&mut keep));
+        let primaries = u64::from(s.width * s.height * s.spp);
+        let v = out.visibility;
+        assert_eq!(v.confirmed + v.fallback, primaries, "{v:?}");
+        // The CPU renderer confirms as many, to the rays' rounding.
+        let cpu_v = reference
+            .render(&mut cpu, &mut |_| {})
+            .expect("cpu render")
+            .visibility;
+        assert!(
+            v.confirmed > primaries / 2 && v.confirmed.abs_diff(cpu_v.confirmed) <= primaries / 100,
+            "GPU {v:?}, CPU {cpu_v:?}"
+        );
         let (mut shadow, mut scatter, mut hit) = (0usize, 0usize, 0usize);
         for r in &records {
             let hits = cpu.trace(&r.rays).expect("cpu trace");
@@ -608,6 +622,7 @@ mod on_gpu {
                     let cpu_rays = reference.primary_rays(r.sample);
                     for (g, c) in r.rays.iter().zip(&cpu_rays) {
                         assert_eq!(g.origin, c.origin);
+                        assert_eq!(g.tmax, f32::INFINITY, "a primary ray kept its limit");
                         let d = (g.dir() - c.dir()).abs().max_element();
                         assert!(d <= 1e-6, "primary ray {g:?} vs the CPU's {c:?}");
                     }

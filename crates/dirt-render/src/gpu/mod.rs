@@ -2,12 +2,17 @@
 //! WGSL passes over a shading buffer that never leaves the GPU.
 //!
 //! One sample is one command encoder and one submission: `camera` writes the
-//! primary rays, then DIRT's `trace` (`dirt_gpu::TraceResources`, the same
-//! passes `DirtGpu` runs), `fetch`, and per bounce `shade`'s steps
+//! primary rays, `direct_visibility`'s `confirm` limits each to its pixel's
+//! rasterised candidate when the exact test hits it, then DIRT's `trace`
+//! (`dirt_gpu::TraceResources`, the same passes `DirtGpu` runs),
+//! `direct_visibility`'s `settle` (the closer of candidate and trace),
+//! `fetch`, and per bounce `shade`'s steps
 //! (`next_event`, the shadow trace, `apply_shadows`, `sample_scatter`, the
 //! trace, `fetch`, `scatter`) and `shift`; `accum` adds the sample to the
 //! image. The host writes 8 bytes before each sample (its number) and reads
-//! the image back once, at the end.
+//! the image back once, at the end. The candidates are the CPU rasteriser's
+//! ([`Renderer::raster`], made once per camera), uploaded with the scene; a
+//! camera that rasterises nothing (orthographic) leaves the stage out.
 //!
 //! Random numbers are the CPU renderer's bit for bit (`rng.wgsl`: integer
 //! arithmetic only) and the hits are DIRT's, which equal the CPU's bit for bit
@@ -75,6 +80,9 @@ pub struct Transfers {
 
 struct Pipelines {
     camera: wgpu::ComputePipeline,
+    /// `direct_visibility`'s `confirm` and `settle`, with their bind group;
+    /// none when the raster proposes nothing.
+    direct_visibility: Option<DirectVisibility>,
     fetch: wgpu::ComputePipeline,
     primary: wgpu::ComputePipeline,
     next_event: wgpu::ComputePipeline,
@@ -99,8 +107,45 @@ fn pipeline(gpu: &Gpu, m: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipe
         })
 }
 
+/// Stage `direct_visibility` on the GPU: its pipelines (compiled exactly,
+/// as DIRT's passes are) and the buffers only it reads.
+struct DirectVisibility {
+    confirm: wgpu::ComputePipeline,
+    settle: wgpu::ComputePipeline,
+    raster: wgpu::Buffer,
+    candidates: wgpu::Buffer,
+}
+
+impl DirectVisibility {
+    /// `None` when `r`'s raster proposes no primitive anywhere.
+    fn new(gpu: &Gpu, r: &Renderer<'_>, n: u32) -> Result<Option<Self>, GpuError> {
+        let prim = &r.raster.prim;
+        if prim.len() != n as usize || prim.iter().all(|&p| p == dirt_math::INVALID_ID) {
+            return Ok(None);
+        }
+        let [confirm, settle]: [wgpu::ComputePipeline; 2] =
+            dirt_gpu::exact_compute_pipelines(gpu, "direct_visibility", &["confirm", "settle"])?
+                .try_into()
+                .map_err(|_| GpuError::Shader {
+                    stage: "direct_visibility",
+                    message: "expected two pipelines".into(),
+                })?;
+        Ok(Some(Self {
+            confirm,
+            settle,
+            raster: storage(gpu, "raster", prim, wgpu::BufferUsages::empty()),
+            candidates: zeroed(
+                gpu,
+                "candidates",
+                u64::from(n) * 16,
+                wgpu::BufferUsages::empty(),
+            ),
+        }))
+    }
+}
+
 impl Pipelines {
-    fn new(gpu: &Gpu) -> Result<Self, GpuError> {
+    fn new(gpu: &Gpu, r: &Renderer<'_>, n: u32) -> Result<Self, GpuError> {
         let camera = dirt_gpu::wgsl_module(gpu, "camera")?;
         let fetch = dirt_gpu::wgsl_module(gpu, "fetch")?;
         let shade = dirt_gpu::wgsl_module(gpu, "shade")?;
@@ -108,6 +153,7 @@ impl Pipelines {
         let accum = dirt_gpu::wgsl_module(gpu, "accum")?;
         Ok(Self {
             camera: pipeline(gpu, &camera, "camera"),
+            direct_visibility: DirectVisibility::new(gpu, r, n)?,
             fetch: pipeline(gpu, &fetch, "fetch"),
             primary: pipeline(gpu, &shade, "primary"),
             next_event: pipeline(gpu, &shade, "next_event"),
@@ -284,6 +330,7 @@ impl SceneBuffers {
 /// The bind groups of every pass (the buffers never change during a render).
 struct Binds {
     camera: wgpu::BindGroup,
+    direct_visibility: Option<wgpu::BindGroup>,
     fetch_cur: wgpu::BindGroup,
     fetch_next: wgpu::BindGroup,
     primary: wgpu::BindGroup,
@@ -371,7 +418,7 @@ impl<'g> GpuRenderer<'g> {
             _ => (s.bounces, s.russian_roulette),
         };
         gpu.scoped("the GPU renderer's set-up", || {
-            let pipelines = Pipelines::new(gpu)?;
+            let pipelines = Pipelines::new(gpu, r, n)?;
             let scene = SceneBuffers::new(gpu, r);
             let c = &r.camera;
             let seed = crate::rng::seed_mix(s.seed);
@@ -450,6 +497,22 @@ impl<'g> GpuRenderer<'g> {
                     &p.camera,
                     &[(0, &params), (1, &state), (2, &rays), (3, &paths)],
                 ),
+                direct_visibility: p.direct_visibility.as_ref().map(|d| {
+                    // `confirm` and `settle` share one layout.
+                    bind(
+                        gpu,
+                        &d.confirm,
+                        &[
+                            (0, &params),
+                            (1, &state),
+                            (2, &rays),
+                            (3, &hits),
+                            (4, &d.raster),
+                            (5, &sc.tris),
+                            (6, &d.candidates),
+                        ],
+                    )
+                }),
                 fetch_cur: fetch(&cur),
                 fetch_next: fetch(&next),
                 primary: bind(gpu, &p.primary, &[(0, &params), (2, &paths), (3, &cur)]),
@@ -583,6 +646,14 @@ impl<'g> GpuRenderer<'g> {
         self.trace.encode_trace(
             self.gpu, enc, ads, &self.rays, &self.hits, None, self.n, traversal,
         )?;
+        if kind == TraceKind::Primary
+            && let (Some(d), Some(b)) = (
+                &self.pipelines.direct_visibility,
+                &self.binds.direct_visibility,
+            )
+        {
+            self.dispatch(enc, &d.settle, b, self.grid);
+        }
         if let Some(f) = inspect.as_mut() {
             let done = std::mem::replace(
                 enc,
@@ -617,6 +688,9 @@ impl<'g> GpuRenderer<'g> {
         let mut enc = self.gpu.device.create_command_encoder(&Default::default());
         let (p, b, g) = (&self.pipelines, &self.binds, self.grid);
         self.dispatch(&mut enc, &p.camera, &b.camera, g);
+        if let (Some(d), Some(b)) = (&p.direct_visibility, &b.direct_visibility) {
+            self.dispatch(&mut enc, &d.confirm, b, g);
+        }
         self.trace(
             &mut enc,
             ads,
@@ -740,10 +814,14 @@ impl<'g> GpuRenderer<'g> {
                 .map(|s| (Vec3::new(s[0], s[1], s[2]) * inv).to_array())
                 .collect(),
         };
+        let confirmed = u64::from(state.confirmed_lo) | (u64::from(state.confirmed_hi) << 32);
         Ok(Rendered {
             image,
             rays: u64::from(state.rays_lo) | (u64::from(state.rays_hi) << 32),
-            visibility: VisibilityStats::default(),
+            visibility: VisibilityStats {
+                confirmed,
+                fallback: (n * u64::from(self.spp)).saturating_sub(confirmed),
+            },
             trace_time: Duration::ZERO,
             elapsed: start.elapsed(),
             tracer: format!("dirt-gpu ({traversal}), shaded on the GPU"),

@@ -38,8 +38,9 @@ pub struct RenderParams {
 
 /// The sample and bounce being rendered (the host writes them before each
 /// sample, `shift`'s `advance` moves the bounce on), hits that were not hits,
-/// and the valid rays traced: this sample's, added to a 64-bit total by
-/// `shift`'s `tally` (32 bytes).
+/// the valid rays traced and the primary rays whose rasterised candidate
+/// `direct_visibility` confirmed: this sample's, added to 64-bit totals by
+/// `shift`'s `tally` (48 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct RenderState {
@@ -49,8 +50,10 @@ pub struct RenderState {
     pub rays: u32,
     pub rays_lo: u32,
     pub rays_hi: u32,
+    pub confirmed: u32,
+    pub confirmed_lo: u32,
+    pub confirmed_hi: u32,
     pub pad0: u32,
-    pub pad1: u32,
 }
 
 /// A triangle with what `fetch` and the lights read (128 bytes).
