@@ -36,7 +36,8 @@ pub struct Rendered {
     /// Rays traced in total.
     pub rays: u64,
     pub visibility: VisibilityStats,
-    /// Time spent inside the tracer.
+    /// Time spent inside the tracer; zero when the trace is not timed apart
+    /// from the shading (a render shaded on the GPU: `gpu::GpuRenderer`).
     pub trace_time: Duration,
     pub elapsed: Duration,
     pub tracer: String,

@@ -563,13 +563,21 @@ fn render_one(
     }
     let secs = rendered.elapsed.as_secs_f64();
     let trace_secs = rendered.trace_time.as_secs_f64();
+    // A render shaded on the GPU traces and shades in one submission per
+    // sample: there is no tracer time of its own to report.
+    let in_tracer = if rendered.trace_time.is_zero() {
+        "traced and shaded in the same submissions".to_string()
+    } else {
+        format!(
+            "{:.3} Mrays/s in the tracer ({trace_secs:.2} s)",
+            rendered.rays as f64 / trace_secs.max(1e-9) / 1e6
+        )
+    };
     eprintln!(
-        "render: {:.2} s, {} rays, {:.3} Mrays/s overall, {:.3} Mrays/s in the tracer ({:.2} s), tracer {}; primary hits: {} confirmed from the raster, {} traced in full; wrote {wrote}",
+        "render: {:.2} s, {} rays, {:.3} Mrays/s overall, {in_tracer}, tracer {}; primary hits: {} confirmed from the raster, {} traced in full; wrote {wrote}",
         secs,
         rendered.rays,
         rendered.rays as f64 / secs.max(1e-9) / 1e6,
-        rendered.rays as f64 / trace_secs.max(1e-9) / 1e6,
-        trace_secs,
         rendered.tracer,
         rendered.visibility.confirmed,
         rendered.visibility.fallback,
