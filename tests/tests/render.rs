@@ -124,3 +124,72 @@ fn gpu_render_equals_cpu_render_hit_for_hit_and_bit_for_bit() {
     );
     let _ = gpu_tracer.inner.name();
 }
+
+/// The image shaded on the GPU (`dirt_render::gpu`) against the CPU
+/// renderer's at equal samples, by RMSE (linear radiance) and FLIP (the
+/// tone-mapped images, `dirt_eval::renders::flip`): shading on the GPU uses
+/// its own `sqrt`, `sin` and division, so the bound is relative to what a
+/// change of seed alone gives (the noise at these samples).
+#[test]
+fn gpu_shaded_image_matches_the_cpu_renderer_by_rmse_and_flip() {
+    let Some(g) =
+        dirt_gpu::testing::any_gpu("gpu_shaded_image_matches_the_cpu_renderer_by_rmse_and_flip")
+    else {
+        return;
+    };
+    let scene = dirt_scene::open("cornell").expect("cornell");
+    let s = Settings {
+        width: 48,
+        height: 36,
+        spp: 8,
+        bounces: 3,
+        mode: Mode::Pt,
+        seed: 3,
+        ..Settings::default()
+    };
+    let camera = Camera::for_scene(&scene, 48.0 / 36.0).expect("camera");
+    let params = AdsParams::default();
+    let mut cpu = DirtCpu::built(&scene.triangles, &params, Traversal::Linear).expect("cpu build");
+    let render_cpu = |s: Settings, cpu: &mut DirtCpu| {
+        Renderer::new(&scene, camera, s)
+            .expect("renderer")
+            .render(cpu, &mut |_| {})
+            .expect("cpu render")
+            .image
+    };
+    let on_cpu = render_cpu(s, &mut cpu);
+    let other_seed = render_cpu(Settings { seed: 4, ..s }, &mut cpu);
+    let renderer = Renderer::new(&scene, camera, s).expect("renderer");
+    let ads = GpuAds::build(g, &scene.triangles, &params).expect("gpu build");
+    let on_gpu = dirt_render::gpu::GpuRenderer::new(g, &renderer)
+        .expect("GPU renderer")
+        .render(&ads, Traversal::Linear, &mut |_| {})
+        .expect("GPU render")
+        .image;
+    let rmse = dirt_render::metrics::rmse;
+    let flip = dirt_eval::renders::flip;
+    let (e_rmse, e_flip) = (
+        rmse(&on_gpu, &on_cpu).expect("size"),
+        flip(&on_cpu, &on_gpu).expect("size"),
+    );
+    let (n_rmse, n_flip) = (
+        rmse(&other_seed, &on_cpu).expect("size"),
+        flip(&on_cpu, &other_seed).expect("size"),
+    );
+    eprintln!(
+        "GPU vs CPU renderer at {} spp: RMSE {e_rmse:.5}, FLIP {e_flip:.5}; another seed: RMSE {n_rmse:.5}, FLIP {n_flip:.5}",
+        s.spp
+    );
+    assert!(
+        n_rmse > 0.0 && n_flip > 0.0,
+        "the seeds gave the same image"
+    );
+    assert!(
+        e_rmse < 0.1 * n_rmse,
+        "RMSE {e_rmse} against noise {n_rmse}"
+    );
+    assert!(
+        e_flip < 0.1 * n_flip,
+        "FLIP {e_flip} against noise {n_flip}"
+    );
+}
