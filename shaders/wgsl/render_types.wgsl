@@ -55,7 +55,8 @@ struct RenderState {
     confirmed: atomic<u32>,
     confirmed_lo: u32,
     confirmed_hi: u32,
-    pad0: u32,
+    // Valid rays `shift`'s `compact` packed for the trace being recorded.
+    live: atomic<u32>,
 }
 
 // A triangle with everything fetch and the lights read (128 bytes).

@@ -230,7 +230,7 @@ fn the_gpu_renderers_structs_match_their_wgsl() {
             confirmed,
             confirmed_lo,
             confirmed_hi,
-            pad0
+            live
         }),
     );
     check(

@@ -23,8 +23,11 @@
 //!
 //! Left out, and said so by [`GpuRenderer::new`]'s errors: ambient occlusion
 //! (`Mode::Ao`) and the browser (the renderer waits for its one read-back).
-//! Paths keep their pixel's slot (no compaction): a path that has ended
-//! sends an invalid ray, which the trace misses at once.
+//! Each secondary trace runs on the live rays packed to the front of its ray
+//! buffer (`shift`'s `compact`, `pad` and `expand`, an atomic counter); its
+//! first dispatch still covers the whole buffer (the trace takes its ray
+//! count from a uniform), the tail being whole workgroups of rays it misses
+//! at once; its continuation rounds are indirect.
 
 pub mod types;
 
@@ -46,6 +49,7 @@ use web_time::Instant;
 pub const TRACE_ROUNDS: u32 = 8;
 
 const STATE_BYTES: u64 = std::mem::size_of::<RenderState>() as u64;
+const LIVE_OFFSET: u64 = std::mem::offset_of!(RenderState, live) as u64;
 
 /// Which trace of a sample a [`TraceRecord`] is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,6 +96,9 @@ struct Pipelines {
     shift: wgpu::ComputePipeline,
     advance: wgpu::ComputePipeline,
     tally: wgpu::ComputePipeline,
+    compact: wgpu::ComputePipeline,
+    pad: wgpu::ComputePipeline,
+    expand: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
 }
 
@@ -163,6 +170,9 @@ impl Pipelines {
             shift: pipeline(gpu, &shift, "shift"),
             advance: pipeline(gpu, &shift, "advance"),
             tally: pipeline(gpu, &shift, "tally"),
+            compact: pipeline(gpu, &shift, "compact"),
+            pad: pipeline(gpu, &shift, "pad"),
+            expand: pipeline(gpu, &shift, "expand"),
             accumulate: pipeline(gpu, &accum, "accumulate"),
         })
     }
@@ -341,6 +351,9 @@ struct Binds {
     shift: wgpu::BindGroup,
     advance: wgpu::BindGroup,
     tally: wgpu::BindGroup,
+    compact: wgpu::BindGroup,
+    pad: wgpu::BindGroup,
+    expand: wgpu::BindGroup,
     accumulate: wgpu::BindGroup,
 }
 
@@ -377,6 +390,8 @@ pub struct GpuRenderer<'g> {
     state: wgpu::Buffer,
     rays: wgpu::Buffer,
     hits: wgpu::Buffer,
+    trace_rays: wgpu::Buffer,
+    trace_hits: wgpu::Buffer,
     sum: wgpu::Buffer,
     transfers: Transfers,
 }
@@ -466,6 +481,10 @@ impl<'g> GpuRenderer<'g> {
             let cur = zeroed(gpu, "G(k)", n64 * 80, copy);
             let next = zeroed(gpu, "G(k+1)", n64 * 80, copy);
             let shadows = zeroed(gpu, "shadows", n64 * 16, copy);
+            // The secondary traces' packed rays and hits (`shift`'s `compact`).
+            let trace_rays = zeroed(gpu, "packed rays", n64 * 32, copy);
+            let trace_hits = zeroed(gpu, "packed hits", n64 * 16, copy);
+            let slot_path = zeroed(gpu, "packed ray paths", n64 * 4, copy);
             let sum = zeroed(
                 gpu,
                 "radiance sum",
@@ -571,6 +590,27 @@ impl<'g> GpuRenderer<'g> {
                 ),
                 advance: bind(gpu, &p.advance, &[(1, &state)]),
                 tally: bind(gpu, &p.tally, &[(1, &state)]),
+                compact: bind(
+                    gpu,
+                    &p.compact,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (5, &rays),
+                        (7, &trace_rays),
+                        (9, &slot_path),
+                    ],
+                ),
+                pad: bind(
+                    gpu,
+                    &p.pad,
+                    &[(0, &params), (1, &state), (6, &hits), (7, &trace_rays)],
+                ),
+                expand: bind(
+                    gpu,
+                    &p.expand,
+                    &[(1, &state), (6, &hits), (8, &trace_hits), (9, &slot_path)],
+                ),
                 accumulate: bind(gpu, &p.accumulate, &[(0, &params), (1, &paths), (2, &sum)]),
             };
             let groups = n.div_ceil(64);
@@ -592,6 +632,8 @@ impl<'g> GpuRenderer<'g> {
                 state,
                 rays,
                 hits,
+                trace_rays,
+                trace_hits,
                 sum,
                 transfers: Transfers::default(),
             })
@@ -643,16 +685,34 @@ impl<'g> GpuRenderer<'g> {
         kind: TraceKind,
         inspect: &mut Option<&mut dyn FnMut(TraceRecord)>,
     ) -> Result<(), RenderError> {
-        self.trace.encode_trace(
-            self.gpu, enc, ads, &self.rays, &self.hits, None, self.n, traversal,
-        )?;
-        if kind == TraceKind::Primary
-            && let (Some(d), Some(b)) = (
-                &self.pipelines.direct_visibility,
-                &self.binds.direct_visibility,
-            )
-        {
-            self.dispatch(enc, &d.settle, b, self.grid);
+        let (p, b, g) = (&self.pipelines, &self.binds, self.grid);
+        if kind == TraceKind::Primary {
+            // Every path has a primary ray: nothing to pack.
+            self.trace.encode_trace(
+                self.gpu, enc, ads, &self.rays, &self.hits, None, self.n, traversal,
+            )?;
+            if let (Some(d), Some(b)) = (&p.direct_visibility, &b.direct_visibility) {
+                self.dispatch(enc, &d.settle, b, g);
+            }
+        } else {
+            // The live rays packed to the front; the trace's dispatch stays
+            // the pool's size, but its tail is whole workgroups of rays that
+            // miss at once.
+            enc.clear_buffer(&self.state, LIVE_OFFSET, Some(4));
+            self.dispatch(enc, &p.compact, &b.compact, g);
+            self.dispatch(enc, &p.pad, &b.pad, g);
+            self.trace.encode_trace(
+                self.gpu,
+                enc,
+                ads,
+                &self.trace_rays,
+                &self.trace_hits,
+                None,
+                self.n,
+                traversal,
+            )?;
+            let (p, b) = (&self.pipelines, &self.binds);
+            self.dispatch(enc, &p.expand, &b.expand, g);
         }
         if let Some(f) = inspect.as_mut() {
             let done = std::mem::replace(

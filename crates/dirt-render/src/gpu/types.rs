@@ -40,7 +40,8 @@ pub struct RenderParams {
 /// sample, `shift`'s `advance` moves the bounce on), hits that were not hits,
 /// the valid rays traced and the primary rays whose rasterised candidate
 /// `direct_visibility` confirmed: this sample's, added to 64-bit totals by
-/// `shift`'s `tally` (48 bytes).
+/// `shift`'s `tally`; the valid rays `shift`'s `compact` packed for the
+/// trace being recorded (48 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct RenderState {
@@ -53,7 +54,7 @@ pub struct RenderState {
     pub confirmed: u32,
     pub confirmed_lo: u32,
     pub confirmed_hi: u32,
-    pub pad0: u32,
+    pub live: u32,
 }
 
 /// A triangle with what `fetch` and the lights read (128 bytes).
