@@ -317,17 +317,43 @@ fn material_factors_are_used() {
 
 #[test]
 fn emitters_and_punctual_lights_light_the_scene() {
-    let cornell = dirt_scene::open("cornell").expect("cornell");
     let s = settings(16, 16, 2, 2, Mode::Pt);
+    let (cornell, dark) = cornell_and_dark();
     let lit = mean(&render_cpu(&cornell, s).image);
+    // A closed room without lights is black (the sky cannot get in).
+    assert_eq!(mean(&render_cpu(&dark, s).image), 0.0);
+    assert!(lit > 0.01);
+    let means: Vec<f64> = LIGHT_KINDS
+        .iter()
+        .map(|&kind| mean(&render_cpu(&with_light(&dark, kind), s).image))
+        .collect();
+    check_light_means(&means);
+}
+
+/// `cornell`, and `cornell` with its emitters turned off.
+fn cornell_and_dark() -> (Scene, Scene) {
+    let cornell = dirt_scene::open("cornell").expect("cornell");
     let mut dark = cornell.clone();
     for m in &mut dark.materials {
         m.emissive = [0.0; 3];
     }
-    // A closed room without lights is black (the sky cannot get in).
-    assert_eq!(mean(&render_cpu(&dark, s).image), 0.0);
-    assert!(lit > 0.01);
-    let light = |kind| Light {
+    (cornell, dark)
+}
+
+/// A point, a spot and a directional light.
+const LIGHT_KINDS: [LightKind; 3] = [
+    LightKind::Point,
+    LightKind::Spot {
+        inner_cone: 0.2,
+        outer_cone: 0.4,
+    },
+    LightKind::Directional,
+];
+
+/// `scene` with one light of `kind` under the ceiling of `cornell`, pointing down.
+fn with_light(scene: &Scene, kind: LightKind) -> Scene {
+    let mut sc = scene.clone();
+    sc.lights.push(Light {
         name: String::new(),
         kind,
         position: Vec3::new(0.0, 1.8, 0.5),
@@ -335,29 +361,20 @@ fn emitters_and_punctual_lights_light_the_scene() {
         color: [1.0, 1.0, 1.0],
         intensity: 3.0,
         range: None,
-    };
-    let mut means = Vec::new();
-    for kind in [
-        LightKind::Point,
-        LightKind::Spot {
-            inner_cone: 0.2,
-            outer_cone: 0.4,
-        },
-    ] {
-        let mut sc = dark.clone();
-        sc.lights.push(light(kind));
-        let m = mean(&render_cpu(&sc, s).image);
-        assert!(m > 0.001, "{kind:?} lights nothing");
-        means.push(m);
-    }
+    });
+    sc
+}
+
+/// The mean radiance of the dark room lit by each of [`LIGHT_KINDS`]: the
+/// point and the spot light it, the spot less; a directional light outside
+/// a closed room is shadowed everywhere.
+fn check_light_means(means: &[f64]) {
+    assert!(means[0] > 0.001 && means[1] > 0.001, "{means:?}");
     assert!(
         means[1] < means[0],
         "a spot lights less than a point: {means:?}"
     );
-    // A directional light outside a closed room is shadowed everywhere.
-    let mut sc = dark.clone();
-    sc.lights.push(light(LightKind::Directional));
-    assert_eq!(mean(&render_cpu(&sc, s).image), 0.0);
+    assert_eq!(means[2], 0.0, "{means:?}");
 }
 
 #[test]
@@ -707,41 +724,14 @@ mod on_gpu {
             return;
         };
         let s = settings(16, 16, 2, 2, Mode::Pt);
-        let cornell = dirt_scene::open("cornell").expect("cornell");
+        let (cornell, dark) = cornell_and_dark();
         assert!(mean(&render(gpu, &cornell, s, None).0.image) > 0.01);
-        let mut dark = cornell.clone();
-        for m in &mut dark.materials {
-            m.emissive = [0.0; 3];
-        }
         assert_eq!(mean(&render(gpu, &dark, s, None).0.image), 0.0);
-        let light = |kind| Light {
-            name: String::new(),
-            kind,
-            position: Vec3::new(0.0, 1.8, 0.5),
-            direction: Vec3::NEG_Y,
-            color: [1.0, 1.0, 1.0],
-            intensity: 3.0,
-            range: None,
-        };
-        let mut means = Vec::new();
-        for kind in [
-            LightKind::Point,
-            LightKind::Spot {
-                inner_cone: 0.2,
-                outer_cone: 0.4,
-            },
-            LightKind::Directional,
-        ] {
-            let mut sc = dark.clone();
-            sc.lights.push(light(kind));
-            means.push(mean(&render(gpu, &sc, s, None).0.image));
-        }
-        assert!(means[0] > 0.001 && means[1] > 0.001, "{means:?}");
-        assert!(
-            means[1] < means[0],
-            "a spot lights less than a point: {means:?}"
-        );
-        assert_eq!(means[2], 0.0, "{means:?}");
+        let means: Vec<f64> = LIGHT_KINDS
+            .iter()
+            .map(|&kind| mean(&render(gpu, &with_light(&dark, kind), s, None).0.image))
+            .collect();
+        check_light_means(&means);
 
         let Some(boxed) = box_textured() else { return };
         let tex = boxed
