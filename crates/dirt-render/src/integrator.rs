@@ -24,7 +24,9 @@ use web_time::Instant;
 pub struct Progress {
     pub samples_done: u32,
     pub spp: u32,
-    /// Rays traced so far (primary, continuation and shadow rays).
+    /// Rays traced so far (primary, continuation and shadow rays); zero
+    /// while they are counted on the GPU (`gpu::GpuRenderer` reads its
+    /// count back with the image, at the end).
     pub rays: u64,
     pub elapsed: Duration,
 }

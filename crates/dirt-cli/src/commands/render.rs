@@ -550,10 +550,12 @@ fn render_one(
             0.0
         };
         bar.set_position(u64::from(p.samples_done));
-        bar.set_message(format!(
-            "{:.2} M rays, {mrays:.3} Mrays/s",
-            p.rays as f64 / 1e6
-        ));
+        bar.set_message(if p.rays == 0 {
+            // Shaded on the GPU: the rays are counted there, read at the end.
+            "samples submitted to the GPU".to_string()
+        } else {
+            format!("{:.2} M rays, {mrays:.3} Mrays/s", p.rays as f64 / 1e6)
+        });
     })?;
     bar.finish_and_clear();
     write_images(&rendered, out, exr, args.exposure)?;
