@@ -42,7 +42,7 @@ struct TraceParams {
     tri_shift: u32, // triangles per chunk: 2^tri_shift (tris.wgsl)
     hiz_shift: u32, // Hi-Z cells per chunk: 2^hiz_shift (hiz.wgsl)
     offset_shift: u32, // list offsets per chunk: 2^offset_shift (offsets.wgsl)
-    _pad0: u32,
+    counted: u32, // 1: the first dispatch traces the rays below pool.head.count_in
 }
 
 // dirt_gpu::PoolHeader
@@ -557,7 +557,7 @@ fn trace_ray(r: u32, resuming: bool) {
 @compute @workgroup_size(64)
 fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let r = gid.x + gid.y * nwg.x * 64u;
-    if r >= params.n_rays {
+    if (r >= params.n_rays) | ((params.counted == 1u) & (r >= pool.head.count_in)) {
         return;
     }
     // Lists that did not fit their ids (a build recorded ahead of its count):
@@ -581,6 +581,18 @@ fn trace_continue(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let list = select(0u, params.capacity, pool.head.parity == 1u);
     trace_ray(pool.data[list + s], true);
+}
+
+// Before a counted first dispatch: the ray count copied into count_in from the
+// caller's buffer, clamped to the ray buffer, sizes it (one row of workgroups:
+// n_rays is at most dirt_gpu::TraceResources::max_rays).
+@compute @workgroup_size(1)
+fn size_first() {
+    let n = min(pool.head.count_in, params.n_rays);
+    pool.head.count_in = n;
+    dispatch[0] = (n + 63u) / 64u;
+    dispatch[1] = 1u;
+    dispatch[2] = 1u;
 }
 
 // Between dispatches: the rays just listed become the next dispatch's input.

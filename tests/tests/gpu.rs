@@ -303,6 +303,125 @@ fn an_applications_device_and_buffers_trace_when_it_submits() {
     }
 }
 
+/// A trace whose ray count is on the GPU (`encode_trace_counted`): the rays
+/// below the count are traced, as the CPU traces them, bit for bit, through
+/// continuation rounds too; the hits past the count keep what they held; a
+/// count past the buffer is clamped to it, and zero traces nothing.
+#[test]
+fn a_counted_trace_traces_the_rays_below_the_gpus_count() {
+    use dirt_gpu::wgpu;
+    use wgpu::util::DeviceExt;
+    let Some(g) = exact_gpu("a_counted_trace_traces_the_rays_below_the_gpus_count") else {
+        return;
+    };
+    let scene = dirt_scene::builtin("cornell").expect("built-in");
+    let tris = &scene.triangles;
+    let rays = adversarial_rays(tris, 12, 7);
+    let n = rays.len() as u32;
+    let params = AdsParams {
+        resolution: 32,
+        ..AdsParams::default()
+    };
+    let ads = GpuAds::build(g, tris, &params).expect("gpu build");
+    let cpu = Ads::build(tris, &params).expect("cpu build");
+    let (want, _) = trace_with_stats(&cpu, tris, &rays, Traversal::HiZ);
+    let ray_buf = g
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("rays"),
+            contents: bytemuck::cast_slice(&rays),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    let sentinel = vec![0xabu8; rays.len() * 16];
+    let hit_buf = g
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("hits"),
+            contents: &sentinel,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        });
+    // The count sits at byte 8, as a field of an application's own state would.
+    let counter = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("counter"),
+        size: 16,
+        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let read = |buf: &wgpu::Buffer| dirt_tests::read_buffer(&g.device, &g.queue, buf);
+    let mut res = TraceResources::new(g);
+    // A small budget: some rays finish in the continuation rounds.
+    res.budget = 40;
+    let mut rounds = 0;
+    for count in [n / 3, 0, n, n + 100, u32::MAX] {
+        g.queue.write_buffer(&hit_buf, 0, &sentinel);
+        g.queue
+            .write_buffer(&counter, 0, bytemuck::cast_slice(&[9u32, 9, count, 9]));
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        res.encode_trace_counted(
+            g,
+            &mut enc,
+            &ads,
+            &ray_buf,
+            &hit_buf,
+            None,
+            n,
+            (&counter, 8),
+            Traversal::HiZ,
+        )
+        .expect("encode");
+        g.queue.submit([enc.finish()]);
+        loop {
+            let head = res.read_header(g).expect("header");
+            if head.count_in == 0 {
+                rounds += head.rounds;
+                break;
+            }
+            let mut enc = g.device.create_command_encoder(&Default::default());
+            res.encode_continue(g, &mut enc).expect("continue");
+            g.queue.submit([enc.finish()]);
+        }
+        let got: Vec<dirt_math::Hit> = bytemuck::pod_collect_to_vec(&read(&hit_buf));
+        let traced = count.min(n) as usize;
+        for i in 0..traced {
+            assert_eq!(got[i].bits(), want[i].bits(), "count {count}: ray {i}");
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(&got);
+        let written =
+            (traced..rays.len()).find(|&i| bytes[i * 16..][..16] != sentinel[i * 16..][..16]);
+        assert_eq!(
+            written, None,
+            "count {count}: a hit past the count was written"
+        );
+    }
+    assert!(rounds > 0, "the budget made no continuation round");
+    // The counter is checked as the other buffers are.
+    let storage_only = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: 16,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    for (buf, at) in [(&storage_only, 0), (&counter, 6), (&counter, 16)] {
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        match res.encode_trace_counted(
+            g,
+            &mut enc,
+            &ads,
+            &ray_buf,
+            &hit_buf,
+            None,
+            n,
+            (buf, at),
+            Traversal::HiZ,
+        ) {
+            Err(dirt_gpu::GpuError::Buffer { what, .. }) => assert_eq!(what, "the ray counter"),
+            other => panic!("counter at {at}: expected a buffer error, got {other:?}"),
+        }
+    }
+}
+
 /// Buffers handed in by the caller are checked before anything is recorded:
 /// too small, or without `STORAGE`, is an error that names the buffer.
 #[test]

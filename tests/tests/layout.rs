@@ -99,7 +99,7 @@ fn shared_structs_match_their_wgsl() {
             tri_shift,
             hiz_shift,
             offset_shift,
-            _pad0
+            counted
         }),
     );
     check(

@@ -4,7 +4,7 @@
 //! - [`Gpu::from_device`] (the application's device and queue) or [`Gpu::new`];
 //! - [`DirtGpu`], the [`dirt_core::Tracer`]: `build(&triangles)` and `trace(&rays)` from host
 //!   slices, or [`DirtGpu::encode_build`] and [`DirtGpu::encode_trace`] recorded into the
-//!   application's encoder;
+//!   application's encoder ([`DirtGpu::encode_trace_counted`] when the ray count is on the GPU);
 //! - underneath, [`GpuAds::build`] (host triangles, each stage waited for), [`GpuAds::frame`]
 //!   with [`GpuAds::encode_build`] (the application's [`GpuMesh`]es; see [`frame`] for list
 //!   storage, feedback and synchronisation), and [`TraceResources`] (see [`trace`] for the
@@ -135,6 +135,8 @@ pub(crate) struct Pipelines {
     trace: wgpu::ComputePipeline,
     trace_continue: wgpu::ComputePipeline,
     schedule: wgpu::ComputePipeline,
+    /// `trace.wgsl`'s `size_first`: a counted trace's first dispatch.
+    size_first: wgpu::ComputePipeline,
     clear_depth: wgpu::ComputePipeline,
     gather: wgpu::ComputePipeline,
     /// `views.wgsl`'s entries, one layout: bounds, views_from_bounds, reach, leave_out.
@@ -260,6 +262,7 @@ impl Pipelines {
             trace,
             trace_continue,
             schedule: compute(device, &tr, "schedule")?,
+            size_first: compute(device, &tr, "size_first")?,
             clear_depth: compute(device, &fd, "clear_depth")?,
             gather: compute(device, &ga, "gather")?,
             views,
@@ -420,6 +423,24 @@ pub(crate) fn record_dispatch(
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind, &[]);
     pass.dispatch_workgroups(x, y, z);
+}
+
+/// [`record_dispatch`] sized by the three `u32` at the start of `args`
+/// (written on the GPU; `args` needs `INDIRECT`).
+pub(crate) fn record_dispatch_indirect(
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind: &wgpu::BindGroup,
+    args: &wgpu::Buffer,
+) {
+    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind, &[]);
+    pass.dispatch_workgroups_indirect(args, 0);
 }
 
 /// Copies `size` bytes of `src` from `offset` back to the CPU (blocks; see

@@ -76,7 +76,10 @@ pub struct TraceParams {
     pub hiz_shift: u32,
     /// List offsets per chunk: `2^offset_shift`.
     pub offset_shift: u32,
-    pub _pad0: u32,
+    /// 1: the first dispatch traces the rays below the count the pool's
+    /// [`PoolHeader::count_in`] holds (copied from the caller's buffer,
+    /// [`crate::TraceResources::encode_trace_counted`]), not all `n_rays`.
+    pub counted: u32,
 }
 
 /// `struct PoolHeader` of `trace.wgsl`: the head of the continuation pool.

@@ -248,7 +248,56 @@ impl TraceResources {
         traversal: Traversal,
     ) -> Result<(), GpuError> {
         gpu.scoped("encode_trace", || {
-            self.encode_trace_unscoped(gpu, enc, ads, rays, hits, stats, count, traversal)
+            self.encode_trace_unscoped(gpu, enc, ads, rays, hits, stats, count, None, traversal)
+        })
+    }
+
+    /// [`TraceResources::encode_trace`] for a ray count only the GPU knows
+    /// (a wavefront's live rays, counted by an atomic): `rays` has room for
+    /// `capacity` rays, and the count is the `u32` at byte `at` of `counter`
+    /// (which needs `COPY_SRC`; `at` a multiple of 4) when the commands run.
+    /// The first dispatch is indirect and covers the first
+    /// `min(count, capacity)` rays only; the hits (and statistics) of the
+    /// slots past them are left as they were. Buffers are checked against
+    /// `capacity`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_trace_counted(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        ads: &GpuAds,
+        rays: &wgpu::Buffer,
+        hits: &wgpu::Buffer,
+        stats: Option<&wgpu::Buffer>,
+        capacity: u32,
+        counter: (&wgpu::Buffer, u64),
+        traversal: Traversal,
+    ) -> Result<(), GpuError> {
+        let (buf, at) = counter;
+        check_buffer(
+            "the ray counter",
+            buf,
+            at.saturating_add(4),
+            wgpu::BufferUsages::COPY_SRC,
+        )?;
+        if at % 4 != 0 {
+            return Err(GpuError::Buffer {
+                what: "the ray counter",
+                problem: format!("the count is at byte {at}, not a multiple of 4"),
+            });
+        }
+        gpu.scoped("encode_trace_counted", || {
+            self.encode_trace_unscoped(
+                gpu,
+                enc,
+                ads,
+                rays,
+                hits,
+                stats,
+                capacity,
+                Some(counter),
+                traversal,
+            )
         })
     }
 
@@ -262,6 +311,7 @@ impl TraceResources {
         hits: &wgpu::Buffer,
         stats: Option<&wgpu::Buffer>,
         count: u32,
+        counter: Option<(&wgpu::Buffer, u64)>,
         traversal: Traversal,
     ) -> Result<(), GpuError> {
         let n = count as u64;
@@ -316,7 +366,7 @@ impl TraceResources {
             tri_shift: ads.tris.shift(),
             hiz_shift: ads.hiz.shift(),
             offset_shift: ads.offsets.shift(),
-            ..Default::default()
+            counted: counter.is_some() as u32,
         };
         let uniform = self
             .params
@@ -351,8 +401,37 @@ impl TraceResources {
             layout: &pipelines.trace.get_bind_group_layout(0),
             entries: &entries,
         });
-        let (x, y) = grid(gpu, n.div_ceil(64));
-        crate::record_dispatch(enc, "trace", &pipelines.trace, &bind, [x, y, 1]);
+        match counter {
+            None => {
+                let (x, y) = grid(gpu, n.div_ceil(64));
+                crate::record_dispatch(enc, "trace", &pipelines.trace, &bind, [x, y, 1]);
+            }
+            Some((buf, at)) => {
+                // The count into the cleared header, then `size_first` turns
+                // it into the first dispatch's size (and the bound `trace` checks).
+                enc.copy_buffer_to_buffer(buf, at, &pool, 0, 4);
+                let size = crate::bind_buffers(
+                    gpu,
+                    "trace size_first",
+                    &gpu.pipelines.size_first.get_bind_group_layout(0),
+                    &[(4, &uniform), (9, &pool), (10, &self.dispatch)],
+                );
+                crate::record_dispatch(
+                    enc,
+                    "trace size_first",
+                    &gpu.pipelines.size_first,
+                    &size,
+                    [1, 1, 1],
+                );
+                crate::record_dispatch_indirect(
+                    enc,
+                    "trace",
+                    &pipelines.trace,
+                    &bind,
+                    &self.dispatch,
+                );
+            }
+        }
         self.bind = Some((bind, split));
         self.encode_schedule(gpu, enc, &pool);
         self.encode_continue(gpu, enc)
@@ -390,15 +469,13 @@ impl TraceResources {
         // Compiled when the trace was recorded: the same pipelines.
         let pipelines = gpu.pipelines_for(split)?;
         for _ in 0..self.rounds {
-            {
-                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("trace_continue"),
-                    timestamp_writes: None,
-                });
-                pass.set_pipeline(&pipelines.trace_continue);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups_indirect(&self.dispatch, 0);
-            }
+            crate::record_dispatch_indirect(
+                enc,
+                "trace_continue",
+                &pipelines.trace_continue,
+                &bind,
+                &self.dispatch,
+            );
             self.encode_schedule(gpu, enc, &pool);
         }
         Ok(())

@@ -201,6 +201,38 @@ impl<'g> DirtGpu<'g> {
         self.resources
             .encode_trace(self.gpu, enc, ads, rays, hits, stats, count, self.traversal)
     }
+
+    /// Records the trace of the rays counted on the GPU: the first
+    /// `min(count, capacity)` of `rays`, `count` being the `u32` at byte `at`
+    /// of `counter` when the commands run (see
+    /// [`TraceResources::encode_trace_counted`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_trace_counted(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        rays: &wgpu::Buffer,
+        hits: &wgpu::Buffer,
+        stats: Option<&wgpu::Buffer>,
+        capacity: u32,
+        counter: (&wgpu::Buffer, u64),
+    ) -> Result<(), GpuError> {
+        let ads = self.ads.as_ref().ok_or_else(|| {
+            GpuError::Params(CoreError::NotBuilt {
+                tracer: "dirt-gpu".into(),
+            })
+        })?;
+        self.resources.encode_trace_counted(
+            self.gpu,
+            enc,
+            ads,
+            rays,
+            hits,
+            stats,
+            capacity,
+            counter,
+            self.traversal,
+        )
+    }
 }
 
 impl DirtGpu<'_> {
