@@ -3,9 +3,8 @@
 // before the next one, and `tally` counts a sample's rays. Around each
 // secondary trace the wavefront is compacted as the CPU renderer's is:
 // `compact` packs the valid rays of the paths to the front of the trace's
-// ray buffer, `pad` fills the rest with rays the trace misses at once (whole
-// workgroups of them: no live ray shares their lanes), and `expand` hands
-// each hit back to its path.
+// ray buffer and counts them (`state.live`, which sizes the trace's first
+// dispatch), and `expand` hands each hit back to its path.
 
 #import render_types
 
@@ -30,25 +29,15 @@ fn compact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     if i >= params.n_paths {
         return;
     }
+    // A path without a valid ray misses, as its ray would; `expand` writes
+    // the others.
+    hits[i] = hit_miss();
     let r = rays[i];
     if ray_valid(r) {
         let k = atomicAdd(&state.live, 1u);
         trace_rays[k] = r;
         slot_path[k] = i;
     }
-}
-
-@compute @workgroup_size(64)
-fn pad(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let k = path_index(gid, groups);
-    if k >= params.n_paths {
-        return;
-    }
-    if k >= atomicLoad(&state.live) {
-        trace_rays[k] = no_ray();
-    }
-    // A path without a valid ray misses, as its ray would.
-    hits[k] = hit_miss();
 }
 
 @compute @workgroup_size(64)

@@ -24,10 +24,10 @@
 //! Left out, and said so by [`GpuRenderer::new`]'s errors: ambient occlusion
 //! (`Mode::Ao`) and the browser (the renderer waits for its one read-back).
 //! Each secondary trace runs on the live rays packed to the front of its ray
-//! buffer (`shift`'s `compact`, `pad` and `expand`, an atomic counter); its
-//! first dispatch still covers the whole buffer (the trace takes its ray
-//! count from a uniform), the tail being whole workgroups of rays it misses
-//! at once; its continuation rounds are indirect.
+//! buffer (`shift`'s `compact` and `expand`, an atomic counter,
+//! `RenderState::live`); the counter sizes the trace's first dispatch
+//! (`TraceResources::encode_trace_counted`, indirect), and its continuation
+//! rounds are indirect too: nothing is dispatched for a path that has ended.
 
 pub mod types;
 
@@ -97,7 +97,6 @@ struct Pipelines {
     advance: wgpu::ComputePipeline,
     tally: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
-    pad: wgpu::ComputePipeline,
     expand: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
 }
@@ -171,7 +170,6 @@ impl Pipelines {
             advance: pipeline(gpu, &shift, "advance"),
             tally: pipeline(gpu, &shift, "tally"),
             compact: pipeline(gpu, &shift, "compact"),
-            pad: pipeline(gpu, &shift, "pad"),
             expand: pipeline(gpu, &shift, "expand"),
             accumulate: pipeline(gpu, &accum, "accumulate"),
         })
@@ -352,7 +350,6 @@ struct Binds {
     advance: wgpu::BindGroup,
     tally: wgpu::BindGroup,
     compact: wgpu::BindGroup,
-    pad: wgpu::BindGroup,
     expand: wgpu::BindGroup,
     accumulate: wgpu::BindGroup,
 }
@@ -597,14 +594,10 @@ impl<'g> GpuRenderer<'g> {
                         (0, &params),
                         (1, &state),
                         (5, &rays),
+                        (6, &hits),
                         (7, &trace_rays),
                         (9, &slot_path),
                     ],
-                ),
-                pad: bind(
-                    gpu,
-                    &p.pad,
-                    &[(0, &params), (1, &state), (6, &hits), (7, &trace_rays)],
                 ),
                 expand: bind(
                     gpu,
@@ -695,13 +688,11 @@ impl<'g> GpuRenderer<'g> {
                 self.dispatch(enc, &d.settle, b, g);
             }
         } else {
-            // The live rays packed to the front; the trace's dispatch stays
-            // the pool's size, but its tail is whole workgroups of rays that
-            // miss at once.
+            // The live rays packed to the front and counted; the count
+            // sizes the trace's first dispatch.
             enc.clear_buffer(&self.state, LIVE_OFFSET, Some(4));
             self.dispatch(enc, &p.compact, &b.compact, g);
-            self.dispatch(enc, &p.pad, &b.pad, g);
-            self.trace.encode_trace(
+            self.trace.encode_trace_counted(
                 self.gpu,
                 enc,
                 ads,
@@ -709,9 +700,9 @@ impl<'g> GpuRenderer<'g> {
                 &self.trace_hits,
                 None,
                 self.n,
+                (&self.state, LIVE_OFFSET),
                 traversal,
             )?;
-            let (p, b) = (&self.pipelines, &self.binds);
             self.dispatch(enc, &p.expand, &b.expand, g);
         }
         if let Some(f) = inspect.as_mut() {
