@@ -73,21 +73,26 @@ fn reference_equals_brute_force_on_adversarial_rays() {
     }
 }
 
+/// Path tracing at 3 bounces, the rest as by default.
+fn path_traced(width: u32, height: u32, spp: u32, seed: u64) -> Settings {
+    Settings {
+        width,
+        height,
+        spp,
+        bounces: 3,
+        mode: Mode::Pt,
+        seed,
+        ..Settings::default()
+    }
+}
+
 #[test]
 fn gpu_render_equals_cpu_render_hit_for_hit_and_bit_for_bit() {
     let Some(g) = exact_gpu("gpu_render_equals_cpu_render_hit_for_hit_and_bit_for_bit") else {
         return;
     };
     let scene = dirt_scene::open("cornell").expect("cornell");
-    let s = Settings {
-        width: 24,
-        height: 24,
-        spp: 2,
-        bounces: 3,
-        mode: Mode::Pt,
-        seed: 5,
-        ..Settings::default()
-    };
+    let s = path_traced(24, 24, 2, 5);
     let camera = Camera::for_scene(&scene, 1.0).expect("camera");
     let renderer = Renderer::new(&scene, camera, s).expect("renderer");
     let params = AdsParams::default();
@@ -138,15 +143,7 @@ fn gpu_shaded_image_matches_the_cpu_renderer_by_rmse_and_flip() {
         return;
     };
     let scene = dirt_scene::open("cornell").expect("cornell");
-    let s = Settings {
-        width: 48,
-        height: 36,
-        spp: 8,
-        bounces: 3,
-        mode: Mode::Pt,
-        seed: 3,
-        ..Settings::default()
-    };
+    let s = path_traced(48, 36, 8, 3);
     let camera = Camera::for_scene(&scene, 48.0 / 36.0).expect("camera");
     let params = AdsParams::default();
     let mut cpu = DirtCpu::built(&scene.triangles, &params, Traversal::Linear).expect("cpu build");
