@@ -35,7 +35,8 @@ struct RenderParams {
     roulette_from: u32,
     n_tris: u32,
     n_materials: u32,
-    pad0: u32,
+    // Mode::Ao: the length of the occlusion rays (Renderer::ao_radius).
+    ao_radius: f32,
     pad1: u32,
 }
 

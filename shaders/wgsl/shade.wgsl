@@ -6,8 +6,11 @@
 //   apply_shadows  — the payloads of shadow rays that reached their light
 //   sample_scatter — the BSDF sampled at G(k): the ray towards G(k+1)
 //   scatter        — after G(k+1) is fetched: throughput, MIS-weighted emission, roulette
-// Paths stay in their pixel's slot (no compaction): a path that sends no ray
-// leaves an invalid one there, which the trace misses at once.
+// and, for Mode::Ao instead of all of them:
+//   ambient_occlusion — one cosine-distributed ray of ao_radius per primary hit
+//   apply_occlusion   — white where that ray reached nothing
+// Each path writes its ray in its own slot, an invalid one when it sends none;
+// shift's `compact` packs the valid ones for the trace.
 
 #import render_types
 #import rng
@@ -224,4 +227,47 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
         path.throughput /= q;
     }
     paths[i] = path;
+}
+
+// Mode::Ao (dirt_render::integrator's ambient_occlusion): a pixel whose primary
+// ray misses is white; a primary hit sends one cosine-distributed ray of
+// ao_radius above its geometric side and is black unless that ray misses.
+@compute @workgroup_size(64)
+fn ambient_occlusion(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = path_index(gid, groups);
+    if i >= params.n_paths {
+        return;
+    }
+    rays[i] = no_ray();
+    let sp = cur[i];
+    if sp.prim == NO_PRIM {
+        paths[i].radiance = vec3<f32>(1.0);
+        return;
+    }
+    paths[i].radiance = vec3<f32>(0.0);
+    let key = sampler_key(params.seed_mix, i, state.sample);
+    let d = cosine_sample(sp.ns, rng_get(key, 1u, DIM_DIR_U), rng_get(key, 1u, DIM_DIR_V));
+    if dot(d, sp.ng) > 0.0 {
+        rays[i] = Ray(offset_origin(sp), 0.0, d, params.ao_radius);
+        atomicAdd(&state.rays, 1u);
+    }
+}
+
+@compute @workgroup_size(64)
+fn apply_occlusion(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = path_index(gid, groups);
+    if i >= params.n_paths {
+        return;
+    }
+    if !ray_valid(rays[i]) {
+        return;
+    }
+    let h = hits[i];
+    if (h.prim == HIT_UNFINISHED) | (h.prim == HIT_STRUCTURE_FULL) {
+        atomicAdd(&state.bad_hits, 1u);
+        return;
+    }
+    if h.prim == NO_PRIM {
+        paths[i].radiance = vec3<f32>(1.0);
+    }
 }

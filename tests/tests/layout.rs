@@ -213,7 +213,7 @@ fn the_gpu_renderers_structs_match_their_wgsl() {
             roulette_from,
             n_tris,
             n_materials,
-            pad0,
+            ao_radius,
             pad1
         }),
     );

@@ -228,3 +228,61 @@ fn frames_are_rebuilt_written_and_previewed_and_a_lone_frame_is_the_same() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// With DIRT on the GPU, `dirt render` shades there too and says so (one
+/// read-back); ambient occlusion shaded on the GPU is `--backend cpu`'s image
+/// but for pixels whose one ray the GPU's rounding moved across an edge;
+/// `--host-shading` shades on the CPU, and with the GPU's exact hits gives
+/// `--backend cpu`'s image bit for bit.
+#[test]
+fn gpu_shading_from_the_command_line_agrees_with_the_cpu() {
+    if dirt_gpu::testing::exact_gpu("gpu_shading_from_the_command_line_agrees_with_the_cpu")
+        .is_none()
+    {
+        return;
+    }
+    let d = dir("gpu-shading");
+    let run = |name: &str, extra: &[&str]| {
+        let exr = d.join(format!("{name}.exr"));
+        let png = d.join(format!("{name}.png"));
+        let mut args = vec![
+            "render",
+            "cornell",
+            "-o",
+            png.to_str().expect("utf-8"),
+            "--exr",
+            exr.to_str().expect("utf-8"),
+        ];
+        args.extend(SMALL);
+        args.extend(extra);
+        // The test's environment reaches the child: WGPU_BACKEND picks the adapter.
+        let out = dirt(&args);
+        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+        let img = dirt_render::Image::read_exr(&exr).expect("exr readable");
+        (text(&out.stderr), img)
+    };
+    let (err, ao_gpu) = run("ao-gpu", &["--mode", "ao", "--backend", "gpu"]);
+    assert!(
+        err.contains("shaded on the GPU") && err.contains("1 read-back"),
+        "{err}"
+    );
+    let (_, ao_cpu) = run("ao-cpu", &["--mode", "ao", "--backend", "cpu"]);
+    let differ = ao_gpu
+        .pixels
+        .iter()
+        .zip(&ao_cpu.pixels)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        differ * 50 <= ao_gpu.pixels.len(),
+        "{differ} AO pixels differ"
+    );
+    let (err, pt_host) = run("pt-host", &["--backend", "gpu", "--host-shading"]);
+    assert!(!err.contains("shaded on the GPU"), "{err}");
+    let (_, pt_cpu) = run("pt-cpu", &["--backend", "cpu"]);
+    assert_eq!(pt_host.bits(), pt_cpu.bits(), "host shading of GPU hits");
+    let (err, pt_gpu) = run("pt-gpu", &["--backend", "gpu"]);
+    assert!(err.contains("shaded on the GPU"), "{err}");
+    assert!(pt_gpu.pixels.iter().flatten().any(|&c| c > 0.0));
+    let _ = fs::remove_dir_all(&d);
+}

@@ -68,8 +68,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = RenderBackend::Auto)]
     backend: RenderBackend,
     /// With DIRT on the GPU: shade on the host (the CPU renderer, one
-    /// round trip per trace) instead of on the GPU. Ambient occlusion is
-    /// always shaded on the host.
+    /// round trip per trace) instead of on the GPU.
     #[arg(long)]
     host_shading: bool,
     /// How DIRT walks the tiles a ray crosses.
@@ -124,7 +123,7 @@ impl RenderTracer<'_> {
 }
 
 /// Renders every sample: on the GPU when the tracer is DIRT on the GPU and
-/// the mode is shaded there (`shade_on_gpu`), else through the CPU renderer.
+/// shading there was not declined (`shade_on_gpu`), else through the CPU renderer.
 fn render_image(
     renderer: &Renderer,
     tracer: &mut RenderTracer,
@@ -340,10 +339,6 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         }
     };
     let shade_on_gpu = matches!(tracer, RenderTracer::Gpu(_)) && !args.host_shading;
-    if shade_on_gpu && settings.mode == Mode::Ao {
-        eprintln!("ambient occlusion is shaded on the host: the GPU traces, the CPU shades");
-    }
-    let shade_on_gpu = shade_on_gpu && settings.mode != Mode::Ao;
     let first_build = kept.unwrap_or_else(|| build.elapsed());
     eprintln!(
         "scene {}: {} triangles; {}x{}, {} spp, {} bounces, mode {:?}; tracer {} ({})",

@@ -8,8 +8,9 @@
 //! `direct_visibility`'s `settle` (the closer of candidate and trace),
 //! `fetch`, and per bounce `shade`'s steps
 //! (`next_event`, the shadow trace, `apply_shadows`, `sample_scatter`, the
-//! trace, `fetch`, `scatter`) and `shift`; `accum` adds the sample to the
-//! image. The host writes 8 bytes before each sample (its number) and reads
+//! trace, `fetch`, `scatter`) and `shift` — or, for `Mode::Ao`,
+//! `ambient_occlusion`, the occlusion trace and `apply_occlusion`; `accum`
+//! adds the sample to the image. The host writes 8 bytes before each sample (its number) and reads
 //! the image back once, at the end. The candidates are the CPU rasteriser's
 //! ([`Renderer::raster`], made once per camera), uploaded with the scene; a
 //! camera that rasterises nothing (orthographic) leaves the stage out.
@@ -21,8 +22,7 @@
 //! rounding flips a decision — a roulette draw, a ray grazing an edge — goes
 //! its own way), not to the bit.
 //!
-//! Left out, and said so by [`GpuRenderer::new`]'s errors: ambient occlusion
-//! (`Mode::Ao`) and the browser (the renderer waits for its one read-back).
+//! Left out: the browser (the renderer waits for its one read-back).
 //! Each secondary trace runs on the live rays packed to the front of its ray
 //! buffer (`shift`'s `compact` and `expand`, an atomic counter,
 //! `RenderState::live`); the counter sizes the trace's first dispatch
@@ -55,8 +55,14 @@ const LIVE_OFFSET: u64 = std::mem::offset_of!(RenderState, live) as u64;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TraceKind {
     Primary,
-    Shadow { bounce: u32 },
-    Scatter { bounce: u32 },
+    Shadow {
+        bounce: u32,
+    },
+    Scatter {
+        bounce: u32,
+    },
+    /// `Mode::Ao`'s occlusion rays.
+    Occlusion,
 }
 
 /// One trace of the GPU renderer, read back (tests only: each costs a
@@ -93,6 +99,8 @@ struct Pipelines {
     apply_shadows: wgpu::ComputePipeline,
     sample_scatter: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
+    ambient_occlusion: wgpu::ComputePipeline,
+    apply_occlusion: wgpu::ComputePipeline,
     shift: wgpu::ComputePipeline,
     advance: wgpu::ComputePipeline,
     tally: wgpu::ComputePipeline,
@@ -166,6 +174,8 @@ impl Pipelines {
             apply_shadows: pipeline(gpu, &shade, "apply_shadows"),
             sample_scatter: pipeline(gpu, &shade, "sample_scatter"),
             scatter: pipeline(gpu, &shade, "scatter"),
+            ambient_occlusion: pipeline(gpu, &shade, "ambient_occlusion"),
+            apply_occlusion: pipeline(gpu, &shade, "apply_occlusion"),
             shift: pipeline(gpu, &shift, "shift"),
             advance: pipeline(gpu, &shift, "advance"),
             tally: pipeline(gpu, &shift, "tally"),
@@ -346,6 +356,8 @@ struct Binds {
     apply_shadows: wgpu::BindGroup,
     sample_scatter: wgpu::BindGroup,
     scatter: wgpu::BindGroup,
+    ambient_occlusion: wgpu::BindGroup,
+    apply_occlusion: wgpu::BindGroup,
     shift: wgpu::BindGroup,
     advance: wgpu::BindGroup,
     tally: wgpu::BindGroup,
@@ -381,6 +393,8 @@ pub struct GpuRenderer<'g> {
     grid: [u32; 3],
     bounces: u32,
     has_lights: bool,
+    /// `Mode::Ao`: one occlusion ray per primary hit instead of the bounces.
+    ao: bool,
     spp: u32,
     width: u32,
     height: u32,
@@ -404,16 +418,9 @@ impl std::fmt::Debug for GpuRenderer<'_> {
 
 impl<'g> GpuRenderer<'g> {
     /// Uploads `r`'s scene, lights and decoded textures and makes the
-    /// shading buffer for its image. `Mode::Ao` is not on the GPU yet
-    /// ([`RenderError::Unsupported`]).
+    /// shading buffer for its image.
     pub fn new(gpu: &'g Gpu, r: &Renderer<'_>) -> Result<Self, RenderError> {
         let s = &r.settings;
-        if s.mode == Mode::Ao {
-            return Err(RenderError::Unsupported(
-                "ambient occlusion is shaded on the host only (use --mode pt or direct on the GPU)"
-                    .into(),
-            ));
-        }
         let n64 = u64::from(s.width) * u64::from(s.height);
         let max_paths = TraceResources::max_rays(gpu).min(u32::MAX / 2);
         let biggest = std::mem::size_of::<PathGpu>() as u64 * n64;
@@ -454,7 +461,7 @@ impl<'g> GpuRenderer<'g> {
                 roulette_from: roulette_from.unwrap_or(u32::MAX),
                 n_tris: r.scene.triangles.len() as u32,
                 n_materials: scene.n_materials,
-                pad0: 0,
+                ao_radius: r.ao_radius,
                 pad1: 0,
             };
             let params = gpu
@@ -557,6 +564,28 @@ impl<'g> GpuRenderer<'g> {
                         (9, &hits),
                     ],
                 ),
+                ambient_occlusion: bind(
+                    gpu,
+                    &p.ambient_occlusion,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (2, &paths),
+                        (3, &cur),
+                        (7, &rays),
+                    ],
+                ),
+                apply_occlusion: bind(
+                    gpu,
+                    &p.apply_occlusion,
+                    &[
+                        (0, &params),
+                        (1, &state),
+                        (2, &paths),
+                        (7, &rays),
+                        (9, &hits),
+                    ],
+                ),
                 sample_scatter: bind(
                     gpu,
                     &p.sample_scatter,
@@ -619,6 +648,7 @@ impl<'g> GpuRenderer<'g> {
                 grid: [x, groups.div_ceil(x), 1],
                 bounces,
                 has_lights: !r.lights.is_empty(),
+                ao: s.mode == Mode::Ao,
                 spp: s.spp,
                 width: s.width,
                 height: s.height,
@@ -752,8 +782,23 @@ impl<'g> GpuRenderer<'g> {
         )?;
         let (p, b) = (&self.pipelines, &self.binds);
         self.dispatch(&mut enc, &p.fetch, &b.fetch_cur, g);
-        self.dispatch(&mut enc, &p.primary, &b.primary, g);
-        for bounce in 1..=self.bounces {
+        if self.ao {
+            self.dispatch(&mut enc, &p.ambient_occlusion, &b.ambient_occlusion, g);
+            self.trace(
+                &mut enc,
+                ads,
+                traversal,
+                sample,
+                TraceKind::Occlusion,
+                inspect,
+            )?;
+            let (p, b) = (&self.pipelines, &self.binds);
+            self.dispatch(&mut enc, &p.apply_occlusion, &b.apply_occlusion, g);
+        } else {
+            self.dispatch(&mut enc, &p.primary, &b.primary, g);
+        }
+        let bounces = if self.ao { 0 } else { self.bounces };
+        for bounce in 1..=bounces {
             let (p, b) = (&self.pipelines, &self.binds);
             self.dispatch(&mut enc, &p.advance, &b.advance, [1, 1, 1]);
             if self.has_lights {

@@ -32,7 +32,8 @@ pub struct RenderParams {
     pub roulette_from: u32,
     pub n_tris: u32,
     pub n_materials: u32,
-    pub pad0: u32,
+    /// `Mode::Ao`: the length of the occlusion rays ([`crate::Renderer::ao_radius`]).
+    pub ao_radius: f32,
     pub pad1: u32,
 }
 
