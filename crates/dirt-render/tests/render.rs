@@ -555,7 +555,7 @@ fn an_awaited_sample_is_the_blocking_sample() {
 
 mod on_gpu {
     use super::*;
-    use dirt_gpu::{DirtGpu, Gpu};
+    use dirt_gpu::{DirtGpu, Gpu, GpuAds};
     use dirt_render::gpu::{GpuRenderer, TraceKind, TraceRecord, Transfers};
     use dirt_render::trace::Recording;
 
@@ -834,6 +834,74 @@ mod on_gpu {
         // Without inspection: one read-back for the image.
         let (_, transfers) = render(gpu, &scene, s, None);
         assert_eq!(transfers.read_backs, 1);
+    }
+
+    /// The progressive form, as a window presents it: samples added one by
+    /// one sum to the whole render's image bit for bit; a new camera
+    /// (`set_camera`: parameters and candidates rewritten, nothing made
+    /// again) gives what a renderer made for that camera gives, bit for bit;
+    /// the counters come back in one read-back.
+    #[test]
+    fn gpu_samples_added_one_by_one_equal_the_whole_render() {
+        let Some(gpu) =
+            dirt_gpu::testing::any_gpu("gpu_samples_added_one_by_one_equal_the_whole_render")
+        else {
+            return;
+        };
+        let scene = lit_cornell();
+        let s = settings(20, 16, 3, 2, Mode::Pt);
+        let ads = GpuAds::build(gpu, &scene.triangles, &AdsParams::default()).expect("gpu build");
+        let camera = Camera::for_scene(&scene, 1.25).expect("camera");
+        let mut moved = camera;
+        moved.eye += moved.right * 0.3;
+        let whole = |c: Camera| {
+            let r = Renderer::new(&scene, c, s).expect("renderer");
+            GpuRenderer::new(gpu, &r)
+                .expect("GPU renderer")
+                .render(&ads, Traversal::HiZ, &mut |_| {})
+                .expect("GPU render")
+        };
+        let (first, second) = (whole(camera), whole(moved));
+        assert_ne!(
+            first.image.bits(),
+            second.image.bits(),
+            "the camera did not move"
+        );
+        let r = Renderer::new(&scene, camera, s).expect("renderer");
+        let mut g = GpuRenderer::new(gpu, &r).expect("GPU renderer");
+        let n = u64::from(s.width * s.height);
+        for (c, want) in [(camera, &first), (moved, &second)] {
+            g.set_camera(&Renderer::new(&scene, c, s).expect("renderer"))
+                .expect("set camera");
+            for k in 0..s.spp {
+                g.add_sample(&ads, Traversal::HiZ, k).expect("sample");
+            }
+            let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(
+                &dirt_gpu::read_back(gpu, g.sums(), 0, n * 16).expect("sums"),
+            );
+            let inv = 1.0 / s.spp as f32;
+            let got: Vec<u32> = sums
+                .iter()
+                .flat_map(|v| [v[0] * inv, v[1] * inv, v[2] * inv])
+                .map(f32::to_bits)
+                .collect();
+            assert_eq!(got, want.image.bits(), "the sums of the samples");
+            let c = g.counters().expect("counters");
+            assert_eq!(
+                u64::from(c.rays_lo) | (u64::from(c.rays_hi) << 32),
+                want.rays
+            );
+            // The candidates are the new camera's: as many confirmed.
+            assert_eq!(
+                u64::from(c.confirmed_lo) | (u64::from(c.confirmed_hi) << 32),
+                want.visibility.confirmed
+            );
+        }
+        let other = settings(8, 8, 1, 1, Mode::Pt);
+        let e = g
+            .set_camera(&Renderer::new(&scene, camera, other).expect("renderer"))
+            .expect_err("another size");
+        assert!(matches!(e, RenderError::Unsupported(_)), "{e}");
     }
 
     /// An image with more pixels than one dispatch of the trace takes is

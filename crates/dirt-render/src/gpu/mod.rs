@@ -10,8 +10,10 @@
 //! (`next_event`, the shadow trace, `apply_shadows`, `sample_scatter`, the
 //! trace, `fetch`, `scatter`) and `shift` — or, for `Mode::Ao`,
 //! `ambient_occlusion`, the occlusion trace and `apply_occlusion`; `accum`
-//! adds the sample to the image. The host writes 8 bytes before each sample (its number) and reads
-//! the image back once, at the end. The candidates are the CPU rasteriser's
+//! adds the sample to the image. The host writes 8 bytes before each sample
+//! (its number) and reads the image back once, at the end — or never: a
+//! window presents [`GpuRenderer::sums`] where they lie
+//! ([`GpuRenderer::add_sample`]). The candidates are the CPU rasteriser's
 //! ([`Renderer::raster`], made once per camera), uploaded with the scene; a
 //! camera that rasterises nothing (orthographic) leaves the stage out.
 //!
@@ -147,7 +149,7 @@ impl DirectVisibility {
         Ok(Some(Self {
             confirm,
             settle,
-            raster: storage(gpu, "raster", prim, wgpu::BufferUsages::empty()),
+            raster: storage(gpu, "raster", prim, wgpu::BufferUsages::COPY_DST),
             candidates: zeroed(
                 gpu,
                 "candidates",
@@ -211,6 +213,17 @@ fn zeroed(gpu: &Gpu, label: &str, bytes: u64, extra: wgpu::BufferUsages) -> wgpu
         usage: wgpu::BufferUsages::STORAGE | extra,
         mapped_at_creation: false,
     })
+}
+
+/// Hits that were not hits make the image wrong: an error, never an image.
+fn check_counters(state: &RenderState) -> Result<(), RenderError> {
+    if state.bad_hits > 0 {
+        return Err(RenderError::Gpu(GpuError::Device(format!(
+            "{} hits of the render were not finished walks ({TRACE_ROUNDS} continuation rounds per trace were not enough, or a frame structure was full): the image would be wrong",
+            state.bad_hits
+        ))));
+    }
+    Ok(())
 }
 
 /// The scene as the passes read it.
@@ -389,6 +402,9 @@ pub struct GpuRenderer<'g> {
     pipelines: Pipelines,
     binds: Binds,
     trace: TraceResources,
+    /// What `params` holds (the camera is rewritten by [`GpuRenderer::set_camera`]).
+    params_value: RenderParams,
+    params: wgpu::Buffer,
     n: u32,
     grid: [u32; 3],
     bounces: u32,
@@ -439,16 +455,8 @@ impl<'g> GpuRenderer<'g> {
         gpu.scoped("the GPU renderer's set-up", || {
             let pipelines = Pipelines::new(gpu, r, n)?;
             let scene = SceneBuffers::new(gpu, r);
-            let c = &r.camera;
             let seed = crate::rng::seed_mix(s.seed);
-            let params = RenderParams {
-                eye: c.eye.to_array(),
-                tan_half_fov: c.tan_half_fov,
-                forward: c.forward.to_array(),
-                ortho_half_height: c.ortho_half_height.unwrap_or(0.0),
-                up: c.up.to_array(),
-                orthographic: c.ortho_half_height.is_some() as u32,
-                right: c.right.to_array(),
+            let mut params = RenderParams {
                 offset: r.offset,
                 environment: r.environment.to_array(),
                 p_area: r.lights.p_area,
@@ -462,14 +470,16 @@ impl<'g> GpuRenderer<'g> {
                 n_tris: r.scene.triangles.len() as u32,
                 n_materials: scene.n_materials,
                 ao_radius: r.ao_radius,
-                pad1: 0,
+                ..RenderParams::default()
             };
+            params.set_camera(&r.camera);
+            let params_value = params;
             let params = gpu
                 .device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("render params"),
                     contents: bytemuck::bytes_of(&params),
-                    usage: wgpu::BufferUsages::UNIFORM,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 });
             let n64 = u64::from(n);
             let copy = wgpu::BufferUsages::COPY_SRC;
@@ -644,6 +654,8 @@ impl<'g> GpuRenderer<'g> {
                 pipelines,
                 binds,
                 trace,
+                params_value,
+                params,
                 n,
                 grid: [x, groups.div_ceil(x), 1],
                 bounces,
@@ -836,6 +848,88 @@ impl<'g> GpuRenderer<'g> {
         Ok(())
     }
 
+    /// Starts the image over: the sums and the counters cleared (recorded
+    /// and submitted, not waited for).
+    pub fn restart(&mut self) {
+        let mut enc = self.gpu.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(&self.sum, 0, None);
+        enc.clear_buffer(&self.state, 0, None);
+        self.submit(enc);
+    }
+
+    /// Adds sample `sample` of every pixel to the sums on the GPU (one
+    /// submission, not waited for): the progressive form of
+    /// [`GpuRenderer::render`], for a window or canvas that presents
+    /// [`GpuRenderer::sums`] without reading them back.
+    pub fn add_sample(
+        &mut self,
+        ads: &GpuAds,
+        traversal: Traversal,
+        sample: u32,
+    ) -> Result<(), RenderError> {
+        let gpu = self.gpu;
+        gpu.scoped("a GPU sample", || {
+            self.sample(ads, traversal, sample, &mut None)
+                .map_err(|e| match e {
+                    RenderError::Gpu(g) => g,
+                    other => GpuError::Device(other.to_string()),
+                })
+        })
+        .map_err(RenderError::from)
+    }
+
+    /// Each pixel's radiance summed over the samples added since the last
+    /// restart: `width·height` `vec4<f32>` (rgb, and 0), rows top to bottom,
+    /// `STORAGE` usage.
+    pub fn sums(&self) -> &wgpu::Buffer {
+        &self.sum
+    }
+
+    /// Points the camera of `r` (the same scene and settings as this
+    /// renderer's) and starts the image over: 128 bytes of parameters and the
+    /// raster's candidates are written, nothing is compiled or made again.
+    pub fn set_camera(&mut self, r: &Renderer<'_>) -> Result<(), RenderError> {
+        let s = &r.settings;
+        if (s.width, s.height) != (self.width, self.height) {
+            return Err(RenderError::Unsupported(format!(
+                "a new camera for a {}x{} image on a {}x{} renderer: make a new one",
+                s.width, s.height, self.width, self.height
+            )));
+        }
+        self.params_value.set_camera(&r.camera);
+        self.gpu
+            .queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&self.params_value));
+        self.transfers.bytes_written += std::mem::size_of::<RenderParams>() as u64;
+        if let Some(d) = &self.pipelines.direct_visibility {
+            // A camera that rasterises nothing proposes no candidate: every ray is traced in full.
+            let none;
+            let prim = if r.raster.prim.len() == self.n as usize {
+                &r.raster.prim
+            } else {
+                none = vec![dirt_math::INVALID_ID; self.n as usize];
+                &none
+            };
+            self.gpu
+                .queue
+                .write_buffer(&d.raster, 0, bytemuck::cast_slice(prim));
+            self.transfers.bytes_written += 4 * u64::from(self.n);
+        }
+        self.restart();
+        Ok(())
+    }
+
+    /// The counters of the samples added since the last restart (one
+    /// read-back): rays traced and hits that were not hits, which make
+    /// the image wrong ([`RenderError::Gpu`]).
+    pub fn counters(&mut self) -> Result<RenderState, RenderError> {
+        let state = self.state.clone();
+        let bytes = self.read(&state, STATE_BYTES)?;
+        let state: RenderState = bytemuck::pod_read_unaligned(&bytes[..STATE_BYTES as usize]);
+        check_counters(&state)?;
+        Ok(state)
+    }
+
     /// Renders every sample through `ads` (built from the renderer's
     /// triangles) and reads the image back once. `progress` is called after
     /// each sample is submitted (not finished: the GPU runs ahead).
@@ -859,11 +953,8 @@ impl<'g> GpuRenderer<'g> {
     ) -> Result<Rendered, RenderError> {
         let start = Instant::now();
         let gpu = self.gpu;
+        self.restart();
         gpu.scoped("the GPU render", || {
-            let mut enc = gpu.device.create_command_encoder(&Default::default());
-            enc.clear_buffer(&self.sum, 0, None);
-            enc.clear_buffer(&self.state, 0, None);
-            self.submit(enc);
             for sample in 0..self.spp {
                 self.sample(ads, traversal, sample, &mut inspect)
                     .map_err(|e| match e {
@@ -894,12 +985,7 @@ impl<'g> GpuRenderer<'g> {
         let bytes = self.read(&staging, n * 16 + STATE_BYTES)?;
         let (sums, state) = bytes.split_at(n as usize * 16);
         let state: RenderState = bytemuck::pod_read_unaligned(&state[..STATE_BYTES as usize]);
-        if state.bad_hits > 0 {
-            return Err(RenderError::Gpu(GpuError::Device(format!(
-                "{} hits of the render were not finished walks ({TRACE_ROUNDS} continuation rounds per trace were not enough, or a frame structure was full): the image would be wrong",
-                state.bad_hits
-            ))));
-        }
+        check_counters(&state)?;
         let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(sums);
         let inv = 1.0 / self.spp as f32;
         let image = Image {

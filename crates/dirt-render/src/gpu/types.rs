@@ -37,6 +37,19 @@ pub struct RenderParams {
     pub pad1: u32,
 }
 
+impl RenderParams {
+    /// The camera's fields: where the primary rays start and which way they go.
+    pub fn set_camera(&mut self, c: &crate::Camera) {
+        self.eye = c.eye.to_array();
+        self.tan_half_fov = c.tan_half_fov;
+        self.forward = c.forward.to_array();
+        self.ortho_half_height = c.ortho_half_height.unwrap_or(0.0);
+        self.up = c.up.to_array();
+        self.orthographic = c.ortho_half_height.is_some() as u32;
+        self.right = c.right.to_array();
+    }
+}
+
 /// The sample and bounce being rendered (the host writes them before each
 /// sample, `shift`'s `advance` moves the bounce on), hits that were not hits,
 /// the valid rays traced and the primary rays whose rasterised candidate
