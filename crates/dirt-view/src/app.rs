@@ -5,8 +5,8 @@ use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;
 
-use dirt_core::Tracer;
 use dirt_render::Renderer;
+use dirt_render::gpu::GpuRenderer;
 use dirt_scene::AnimatedScene;
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
@@ -18,7 +18,7 @@ use winit::window::{Window, WindowId};
 use crate::accum::Accumulator;
 use crate::orbit::{ORBIT_PER_KEY, Orbit};
 use crate::present::{Device, Presenter};
-use crate::{ViewError, ViewOptions};
+use crate::{ViewError, ViewOptions, ViewTracer};
 
 /// Which drag is under way.
 #[derive(Clone, Copy, Debug, Default)]
@@ -53,7 +53,15 @@ impl Clock {
 pub struct App<'g> {
     options: ViewOptions,
     scene: AnimatedScene,
-    tracer: Box<dyn Tracer + 'g>,
+    tracer: ViewTracer<'g>,
+    /// Shading on the GPU (DIRT on the GPU, a still scene, not declined):
+    /// its renderer, made for the first sample and kept while the image
+    /// keeps its size; the sums are presented where they lie.
+    shade_on_gpu: bool,
+    shaded: Option<GpuRenderer<'g>>,
+    /// Samples per pixel in the GPU renderer's sums, and when they started.
+    gpu_samples: u32,
+    gpu_start: Instant,
     device: &'g Device,
     window: Option<Arc<Window>>,
     presenter: Option<Presenter>,
@@ -78,7 +86,7 @@ impl std::fmt::Debug for App<'_> {
             .field("scene", &self.scene.scene.name)
             .field("tracer", &self.tracer.name())
             .field("frames", &self.frames)
-            .field("samples", &self.accum.samples)
+            .field("samples", &self.samples())
             .finish_non_exhaustive()
     }
 }
@@ -87,9 +95,20 @@ impl<'g> App<'g> {
     pub fn new(
         options: ViewOptions,
         scene: AnimatedScene,
-        tracer: Box<dyn Tracer + 'g>,
+        tracer: ViewTracer<'g>,
         device: &'g Device,
     ) -> Result<Self, ViewError> {
+        let shade_on_gpu = matches!(tracer, ViewTracer::Gpu(_)) && !options.host_shading;
+        if shade_on_gpu && scene.is_animated() {
+            eprintln!(
+                "dirt view: the scene moves: shaded on the host, the image uploaded each frame (DIRT traces on the GPU)"
+            );
+        } else if shade_on_gpu {
+            eprintln!(
+                "dirt view: shaded on the GPU, the image presented where it lies (no read-back)"
+            );
+        }
+        let shade_on_gpu = shade_on_gpu && !scene.is_animated();
         let (w, h) = options.internal_size(options.width, options.height);
         let orbit = crate::start_camera(&options, &scene.scene, w as f32 / h as f32)?;
         let clock = Clock {
@@ -107,6 +126,10 @@ impl<'g> App<'g> {
             options,
             scene,
             tracer,
+            shade_on_gpu,
+            shaded: None,
+            gpu_samples: 0,
+            gpu_start: Instant::now(),
             device,
             window: None,
             presenter: None,
@@ -125,17 +148,71 @@ impl<'g> App<'g> {
     }
 
     /// What the event loop ended with.
-    pub fn finish(self) -> Result<(), ViewError> {
-        match self.error {
-            Some(e) => Err(e),
-            None => Ok(()),
+    pub fn finish(mut self) -> Result<(), ViewError> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        // Shaded on the GPU: its counters, read once, say whether every hit was one.
+        if let Some(g) = self.shaded.as_mut() {
+            g.counters()?;
+        }
+        Ok(())
+    }
+
+    /// Samples per pixel in the image shown.
+    fn samples(&self) -> u32 {
+        if self.shade_on_gpu {
+            self.gpu_samples
+        } else {
+            self.accum.samples
         }
     }
 
     fn converged(&self) -> bool {
         self.options
             .max_samples
-            .is_some_and(|m| self.accum.samples >= m)
+            .is_some_and(|m| self.samples() >= m)
+    }
+
+    /// One more sample on the GPU, added to the sums there; the renderer is
+    /// made for the first sample and pointed at the camera of each restart.
+    /// The counters are read back once, when the image is done.
+    fn gpu_sample(&mut self) -> Result<(), ViewError> {
+        let ViewTracer::Gpu(t) = &self.tracer else {
+            return Err(ViewError::Internal(
+                "GPU shading without DIRT on the GPU".into(),
+            ));
+        };
+        let (w, h) = (self.accum.width, self.accum.height);
+        if self.gpu_samples == 0 {
+            let settings = self.options.settings(w, h);
+            let renderer = Renderer::new(&self.scene.scene, self.orbit.camera()?, settings)?;
+            match self.shaded.as_mut() {
+                Some(g) => g.set_camera(&renderer)?,
+                None => self.shaded = Some(GpuRenderer::new(t.gpu(), &renderer)?),
+            }
+            self.gpu_start = Instant::now();
+        }
+        let ads = t
+            .ads()
+            .ok_or_else(|| ViewError::Internal("DIRT on the GPU is not built".into()))?;
+        let Some(g) = self.shaded.as_mut() else {
+            return Err(ViewError::Internal("no GPU renderer".into()));
+        };
+        g.add_sample(ads, t.traversal, self.gpu_samples)?;
+        self.gpu_samples += 1;
+        if self
+            .options
+            .max_samples
+            .is_some_and(|m| self.gpu_samples >= m)
+        {
+            // Done: the one read-back says how many rays, and that every hit was one.
+            let c = g.counters()?;
+            self.rays = u64::from(c.rays_lo) | (u64::from(c.rays_hi) << 32);
+            let secs = self.gpu_start.elapsed().as_secs_f64();
+            self.mrays_per_s = self.rays as f64 / secs.max(1e-9) / 1e6;
+        }
+        Ok(())
     }
 
     /// Whether another redraw would change the image.
@@ -153,26 +230,37 @@ impl<'g> App<'g> {
                 .pose(t)
                 .map_err(|source| ViewError::Pose { time: t, source })?;
             // The triangles moved: DIRT is rebuilt (same parameters), the image restarts.
-            self.tracer.build(&self.scene.scene.triangles)?;
+            self.tracer.as_tracer().build(&self.scene.scene.triangles)?;
             self.accum.reset();
         }
         if self.moved {
             self.accum.reset();
+            self.gpu_samples = 0;
             self.moved = false;
         }
-        if !self.converged() {
-            let settings = self.options.settings(self.accum.width, self.accum.height);
-            let renderer = Renderer::new(&self.scene.scene, self.orbit.camera()?, settings)?;
-            let start = Instant::now();
-            let pass = renderer.render_sample(self.tracer.as_mut(), self.accum.samples)?;
-            let secs = start.elapsed().as_secs_f64();
-            self.accum.add(&pass.radiance)?;
-            self.rays = pass.rays;
-            self.mrays_per_s = pass.rays as f64 / secs.max(1e-9) / 1e6;
-        }
-        let rgba = self.accum.rgba8(self.options.exposure);
-        if let Some(p) = self.presenter.as_mut() {
-            p.draw(&rgba, self.accum.width, self.accum.height)?;
+        if self.shade_on_gpu {
+            if !self.converged() {
+                self.gpu_sample()?;
+            }
+            if let (Some(p), Some(g)) = (self.presenter.as_mut(), self.shaded.as_ref()) {
+                let (w, h) = (self.accum.width, self.accum.height);
+                p.draw_sums(g.sums(), w, h, self.gpu_samples, self.options.exposure)?;
+            }
+        } else {
+            if !self.converged() {
+                let settings = self.options.settings(self.accum.width, self.accum.height);
+                let renderer = Renderer::new(&self.scene.scene, self.orbit.camera()?, settings)?;
+                let start = Instant::now();
+                let pass = renderer.render_sample(self.tracer.as_tracer(), self.accum.samples)?;
+                let secs = start.elapsed().as_secs_f64();
+                self.accum.add(&pass.radiance)?;
+                self.rays = pass.rays;
+                self.mrays_per_s = pass.rays as f64 / secs.max(1e-9) / 1e6;
+            }
+            let rgba = self.accum.rgba8(self.options.exposure);
+            if let Some(p) = self.presenter.as_mut() {
+                p.draw(&rgba, self.accum.width, self.accum.height)?;
+            }
         }
         self.frames += 1;
         self.report();
@@ -199,13 +287,18 @@ impl<'g> App<'g> {
         };
         if let Some(w) = &self.window {
             w.set_title(&format!(
-                "dirt view: {} | {} spp | {:.2} Mrays/s | {}x{} | {}{anim}",
+                "dirt view: {} | {} spp | {:.2} Mrays/s | {}x{} | {}{}{anim}",
                 self.scene.scene.name,
-                self.accum.samples,
+                self.samples(),
                 self.mrays_per_s,
                 self.accum.width,
                 self.accum.height,
                 self.tracer.name(),
+                if self.shade_on_gpu {
+                    ", shaded on the GPU"
+                } else {
+                    ""
+                },
             ));
         }
         let every = self.options.print_every;
@@ -217,7 +310,7 @@ impl<'g> App<'g> {
                 out,
                 "frame {} samples {} rays {} mrays_per_s {:.3} time {} camera eye={},{},{} target={},{},{} fov={}",
                 self.frames,
-                self.accum.samples,
+                self.samples(),
                 self.rays,
                 self.mrays_per_s,
                 self.scene.time(),
@@ -292,6 +385,9 @@ impl<'g> App<'g> {
         let (w, h) = self.options.internal_size(size.width, size.height);
         if (w, h) != (self.accum.width, self.accum.height) {
             self.accum = Accumulator::new(w, h);
+            // The GPU renderer's buffers are the image's size: made again.
+            self.shaded = None;
+            self.gpu_samples = 0;
         }
     }
 }

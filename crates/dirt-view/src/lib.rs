@@ -98,6 +98,9 @@ pub struct ViewOptions {
     pub mode: Mode,
     pub seed: u64,
     pub backend: Backend,
+    /// With DIRT on the GPU: shade on the host (the image uploaded each
+    /// frame) instead of on the GPU (`dirt_render::gpu`, nothing read back).
+    pub host_shading: bool,
     pub traversal: Traversal,
     pub ads: Ads,
     /// Camera overrides; the rest as `dirt render` places it.
@@ -127,6 +130,7 @@ impl Default for ViewOptions {
             mode: Mode::Pt,
             seed: Settings::default().seed,
             backend: Backend::Auto,
+            host_shading: false,
             traversal: Traversal::default(),
             ads: Ads::Auto(AdsParams::default()),
             eye: None,
@@ -245,27 +249,55 @@ fn choose_ads(
     Ok((best, choice.best_ads.take()))
 }
 
+/// The viewer's tracer: DIRT on the GPU is kept by its type, so that the
+/// image can be shaded there too (`dirt_render::gpu`).
+pub(crate) enum ViewTracer<'g> {
+    Gpu(Box<DirtGpu<'g>>),
+    Cpu(Box<DirtCpu>),
+}
+
+impl ViewTracer<'_> {
+    pub(crate) fn as_tracer(&mut self) -> &mut dyn Tracer {
+        match self {
+            ViewTracer::Gpu(t) => t.as_mut(),
+            ViewTracer::Cpu(t) => t.as_mut(),
+        }
+    }
+
+    pub(crate) fn name(&self) -> String {
+        match self {
+            ViewTracer::Gpu(t) => t.name(),
+            ViewTracer::Cpu(t) => t.name(),
+        }
+    }
+}
+
 /// The tracer: DIRT built once for the scene on the GPU (`gpu`) or the CPU.
 fn tracer<'g>(
     options: &ViewOptions,
     scene: &dirt_scene::Scene,
     gpu: Option<&'g Gpu>,
-) -> Result<Box<dyn Tracer + 'g>, ViewError> {
+) -> Result<ViewTracer<'g>, ViewError> {
     let (w, h) = options.internal_size(options.width, options.height);
     let rays = options.settings(w, h).max_rays();
     let tris = &scene.triangles;
     let start = std::time::Instant::now();
-    let tracer: Box<dyn Tracer + 'g> = match gpu {
+    let tracer = match gpu {
         Some(g) => {
             let (params, _) = choose_ads(options, scene, rays, Some(g.binding_limits()))?;
-            Box::new(DirtGpu::built(g, tris, &params, options.traversal)?)
+            ViewTracer::Gpu(Box::new(DirtGpu::built(
+                g,
+                tris,
+                &params,
+                options.traversal,
+            )?))
         }
         None => {
             let (params, built) = choose_ads(options, scene, rays, None)?;
-            Box::new(match built {
+            ViewTracer::Cpu(Box::new(match built {
                 Some(ads) => DirtCpu::from_ads(ads, tris, options.traversal),
                 None => DirtCpu::built(tris, &params, options.traversal)?,
-            })
+            }))
         }
     };
     eprintln!(
@@ -399,7 +431,7 @@ mod tests {
         let r =
             dirt_render::Renderer::new(&scene, orbit.camera().expect("camera"), o.settings(w, h))
                 .expect("renderer");
-        let pass = r.render_sample(t.as_mut(), 0).expect("pass");
+        let pass = r.render_sample(t.as_tracer(), 0).expect("pass");
         assert_eq!(pass.radiance.len(), (w * h) as usize);
         assert!(pass.rays >= u64::from(w * h));
     }

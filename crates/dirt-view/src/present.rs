@@ -1,7 +1,10 @@
 //! Putting the image on the window: the device (shared with DIRT on the GPU
 //! when it traces there), the surface, and a fullscreen triangle that copies
 //! the tone-mapped image, texel for texel, to the window (nearest texel when
-//! the window is larger than the image).
+//! the window is larger than the image). The image is either uploaded
+//! ([`Presenter::draw`]) or, when the GPU renderer shades it, tone-mapped
+//! from its radiance sums where they lie ([`Presenter::draw_sums`]: nothing
+//! is read back).
 
 use std::sync::Arc;
 
@@ -40,14 +43,75 @@ fn fs_plain(in: Out) -> @location(0) vec4<f32> {
 }
 
 // ...and decoded for an sRGB target, which encodes them again.
-@fragment
-fn fs_srgb(in: Out) -> @location(0) vec4<f32> {
-    let c = texel(in.uv).rgb;
+fn decode(c: vec3<f32>) -> vec4<f32> {
     let lo = c / 12.92;
     let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
     return vec4<f32>(select(hi, lo, c <= vec3<f32>(0.04045)), 1.0);
 }
+
+@fragment
+fn fs_srgb(in: Out) -> @location(0) vec4<f32> {
+    return decode(texel(in.uv).rgb);
+}
+
+// The GPU renderer's radiance sums (dirt_render::gpu::GpuRenderer::sums) and
+// how to tone-map their mean as dirt_render::Image::to_srgb8 does.
+struct Tone {
+    width: u32,
+    height: u32,
+    inv_samples: f32,
+    // 2^exposure
+    scale: f32,
+}
+
+@group(0) @binding(1) var<storage, read> sums: array<vec4<f32>>;
+@group(0) @binding(2) var<uniform> tone: Tone;
+
+fn aces(x: f32) -> f32 {
+    let y = max(x, 0.0);
+    return clamp((y * (2.51 * y + 0.03)) / (y * (2.43 * y + 0.59) + 0.14), 0.0, 1.0);
+}
+
+fn linear_to_srgb(x: f32) -> f32 {
+    if x <= 0.0031308 {
+        return 12.92 * x;
+    }
+    return 1.055 * pow(x, 1.0 / 2.4) - 0.055;
+}
+
+// One channel as the 8-bit value to_srgb8 writes, over 255 (non-finite: 0).
+fn byte(c: f32) -> f32 {
+    let v = select(0.0, c, abs(c) <= 3.4028235e38);
+    return floor(clamp(linear_to_srgb(aces(v * tone.scale)) * 255.0 + 0.5, 0.0, 255.0)) / 255.0;
+}
+
+fn mean_texel(uv: vec2<f32>) -> vec3<f32> {
+    let size = vec2<i32>(i32(tone.width), i32(tone.height));
+    let xy = clamp(vec2<i32>(floor(uv * vec2<f32>(size))), vec2<i32>(0), size - 1);
+    let m = sums[u32(xy.y) * tone.width + u32(xy.x)].rgb * tone.inv_samples;
+    return vec3<f32>(byte(m.r), byte(m.g), byte(m.b));
+}
+
+@fragment
+fn fs_sums_plain(in: Out) -> @location(0) vec4<f32> {
+    return vec4<f32>(mean_texel(in.uv), 1.0);
+}
+
+@fragment
+fn fs_sums_srgb(in: Out) -> @location(0) vec4<f32> {
+    return decode(mean_texel(in.uv));
+}
 "#;
+
+/// `struct Tone` of the present shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct Tone {
+    width: u32,
+    height: u32,
+    inv_samples: f32,
+    scale: f32,
+}
 
 /// The instance, adapter, device and queue: made before the window, so that
 /// DIRT on the GPU can be built on the same device.
@@ -113,8 +177,46 @@ pub struct Presenter {
     pipeline: wgpu::RenderPipeline,
     /// The image's texture and bind group, remade when its size changes.
     image: Option<(wgpu::Texture, wgpu::BindGroup)>,
+    /// Tone-mapping the GPU renderer's sums in place.
+    sums_pipeline: wgpu::RenderPipeline,
+    tone: wgpu::Buffer,
     device: wgpu::Device,
     queue: wgpu::Queue,
+}
+
+/// The fullscreen triangle with fragment entry `fs` of `module`, drawing to `format`.
+fn fullscreen(
+    dev: &Device,
+    module: &wgpu::ShaderModule,
+    format: wgpu::TextureFormat,
+    fs: &str,
+) -> wgpu::RenderPipeline {
+    dev.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(fs),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
 }
 
 impl Presenter {
@@ -167,42 +269,36 @@ impl Presenter {
                 label: Some("dirt view present"),
                 source: wgpu::ShaderSource::Wgsl(SHADER.into()),
             });
-        let pipeline = dev
-            .device
-            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("dirt view present"),
-                layout: None,
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(if format.is_srgb() {
-                        "fs_srgb"
-                    } else {
-                        "fs_plain"
-                    }),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+        let srgb = format.is_srgb();
+        let pipeline = fullscreen(
+            dev,
+            &module,
+            format,
+            if srgb { "fs_srgb" } else { "fs_plain" },
+        );
+        let sums_pipeline = fullscreen(
+            dev,
+            &module,
+            format,
+            if srgb {
+                "fs_sums_srgb"
+            } else {
+                "fs_sums_plain"
+            },
+        );
+        let tone = dev.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("dirt view tone"),
+            size: std::mem::size_of::<Tone>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         Ok(Self {
             surface,
             config,
             pipeline,
             image: None,
+            sums_pipeline,
+            tone,
             device: dev.device.clone(),
             queue: dev.queue.clone(),
         })
@@ -277,54 +373,124 @@ impl Presenter {
                 depth_or_array_layers: 1,
             },
         );
-        let frame = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(f)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
-            // Hidden or mid-resize: skip this one, the next redraw tries again.
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                return Ok(());
-            }
-            wgpu::CurrentSurfaceTexture::Outdated => {
-                self.surface.configure(&self.device, &self.config);
-                return Ok(());
-            }
-            other => {
-                return Err(ViewError::Surface(format!(
-                    "cannot get the window's next image: {other:?}"
-                )));
-            }
-        };
-        let target = frame
-            .texture
-            .create_view(&wgpu::TextureViewDescriptor::default());
-        let mut enc = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("dirt view present"),
-            });
-        {
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("dirt view present"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, bind, &[]);
-            pass.draw(0..3, 0..1);
-        }
-        self.queue.submit([enc.finish()]);
-        self.queue.present(frame);
-        Ok(())
+        present(
+            &self.surface,
+            &self.config,
+            &self.device,
+            &self.queue,
+            &self.pipeline,
+            bind,
+        )
     }
+
+    /// Draws the mean of `samples` samples of the GPU renderer's radiance
+    /// sums (`width` x `height`, [`dirt_render::gpu::GpuRenderer::sums`], on
+    /// this presenter's device), tone-mapped at `exposure` stops as
+    /// `dirt render` writes its PNG: nothing is read back.
+    pub fn draw_sums(
+        &mut self,
+        sums: &wgpu::Buffer,
+        width: u32,
+        height: u32,
+        samples: u32,
+        exposure: f32,
+    ) -> Result<(), ViewError> {
+        if sums.size() < 16 * u64::from(width) * u64::from(height) {
+            return Err(ViewError::Internal(format!(
+                "{} bytes of sums for a {width}x{height} image",
+                sums.size()
+            )));
+        }
+        let tone = Tone {
+            width,
+            height,
+            inv_samples: if samples == 0 {
+                0.0
+            } else {
+                1.0 / samples as f32
+            },
+            scale: exposure.exp2(),
+        };
+        self.queue
+            .write_buffer(&self.tone, 0, bytemuck::bytes_of(&tone));
+        let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("dirt view sums"),
+            layout: &self.sums_pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: sums.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: self.tone.as_entire_binding(),
+                },
+            ],
+        });
+        present(
+            &self.surface,
+            &self.config,
+            &self.device,
+            &self.queue,
+            &self.sums_pipeline,
+            &bind,
+        )
+    }
+}
+
+/// Draws `pipeline` with `bind` over the window's next image and presents it.
+fn present(
+    surface: &wgpu::Surface<'static>,
+    config: &wgpu::SurfaceConfiguration,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    pipeline: &wgpu::RenderPipeline,
+    bind: &wgpu::BindGroup,
+) -> Result<(), ViewError> {
+    let frame = match surface.get_current_texture() {
+        wgpu::CurrentSurfaceTexture::Success(f) | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
+        // Hidden or mid-resize: skip this one, the next redraw tries again.
+        wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+            return Ok(());
+        }
+        wgpu::CurrentSurfaceTexture::Outdated => {
+            surface.configure(device, config);
+            return Ok(());
+        }
+        other => {
+            return Err(ViewError::Surface(format!(
+                "cannot get the window's next image: {other:?}"
+            )));
+        }
+    };
+    let target = frame
+        .texture
+        .create_view(&wgpu::TextureViewDescriptor::default());
+    let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("dirt view present"),
+    });
+    {
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("dirt view present"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.draw(0..3, 0..1);
+    }
+    queue.submit([enc.finish()]);
+    queue.present(frame);
+    Ok(())
 }

@@ -42,6 +42,11 @@ pub struct ViewArgs {
     /// Which DIRT traces. `auto`: the GPU on a hardware adapter, else the CPU.
     #[arg(long, value_enum, default_value_t = ViewBackend::Auto)]
     backend: ViewBackend,
+    /// With DIRT on the GPU: shade on the host and upload the image each
+    /// frame, instead of shading on the GPU and presenting the sums where
+    /// they lie (an animated scene is always shaded on the host).
+    #[arg(long)]
+    host_shading: bool,
     /// How DIRT walks the tiles a ray crosses.
     #[arg(long, value_enum, default_value_t = Traversal::default())]
     traversal: Traversal,
@@ -108,6 +113,7 @@ impl ViewArgs {
                 ViewBackend::Gpu => Backend::Gpu,
                 ViewBackend::Cpu => Backend::Cpu,
             },
+            host_shading: self.host_shading,
             traversal: self.traversal,
             ads,
             eye: self.camera.eye,
