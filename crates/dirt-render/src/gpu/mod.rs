@@ -450,6 +450,8 @@ impl<'g> GpuRenderer<'g> {
         let n = n64 as u32;
         let (bounces, roulette_from) = match s.mode {
             Mode::Direct => (1, None),
+            // One occlusion ray after the primary hit, no bounce.
+            Mode::Ao => (0, None),
             _ => (s.bounces, s.russian_roulette),
         };
         gpu.scoped("the GPU renderer's set-up", || {
@@ -809,8 +811,7 @@ impl<'g> GpuRenderer<'g> {
         } else {
             self.dispatch(&mut enc, &p.primary, &b.primary, g);
         }
-        let bounces = if self.ao { 0 } else { self.bounces };
-        for bounce in 1..=bounces {
+        for bounce in 1..=self.bounces {
             let (p, b) = (&self.pipelines, &self.binds);
             self.dispatch(&mut enc, &p.advance, &b.advance, [1, 1, 1]);
             if self.has_lights {
