@@ -904,6 +904,69 @@ mod on_gpu {
         assert!(matches!(e, RenderError::Unsupported(_)), "{e}");
     }
 
+    /// An animation's next pose on the same renderer (`set_scene`: the
+    /// triangle and light tables, the parameters and candidates rewritten)
+    /// renders what a renderer made for that pose renders, bit for bit; a
+    /// pose with another triangle count is refused.
+    #[test]
+    fn gpu_renderer_follows_a_new_pose_as_a_new_renderer_would() {
+        let Some(gpu) =
+            dirt_gpu::testing::any_gpu("gpu_renderer_follows_a_new_pose_as_a_new_renderer_would")
+        else {
+            return;
+        };
+        let scene = lit_cornell();
+        // Every triangle (the light among them) moved and the room squashed.
+        let mut posed = scene.clone();
+        for t in &mut posed.triangles {
+            for v in &mut t.v {
+                v[0] = v[0] * 0.8 + 0.05;
+                v[1] += 0.1;
+            }
+        }
+        let s = settings(20, 16, 2, 2, Mode::Pt);
+        let camera = Camera::for_scene(&scene, 1.25).expect("camera");
+        let render = |g: &mut GpuRenderer, sc: &Scene| {
+            let ads = GpuAds::build(gpu, &sc.triangles, &AdsParams::default()).expect("build");
+            g.render(&ads, Traversal::HiZ, &mut |_| {})
+                .expect("GPU render")
+        };
+        let fresh = {
+            let r = Renderer::new(&posed, camera, s).expect("renderer");
+            render(
+                &mut GpuRenderer::new(gpu, &r).expect("GPU renderer"),
+                &posed,
+            )
+        };
+        let r = Renderer::new(&scene, camera, s).expect("renderer");
+        let mut g = GpuRenderer::new(gpu, &r).expect("GPU renderer");
+        let before = render(&mut g, &scene);
+        assert_ne!(
+            before.image.bits(),
+            fresh.image.bits(),
+            "the pose changed nothing"
+        );
+        g.set_scene(&Renderer::new(&posed, camera, s).expect("renderer"))
+            .expect("set scene");
+        let after = render(&mut g, &posed);
+        assert_eq!(after.image.bits(), fresh.image.bits());
+        assert_eq!(after.rays, fresh.rays);
+        assert_eq!(after.visibility.confirmed, fresh.visibility.confirmed);
+        let mut fewer = posed.clone();
+        fewer.triangles.pop();
+        fewer.tri_material.pop();
+        if let Some(n) = fewer.tri_normals.as_mut() {
+            n.pop();
+        }
+        if let Some(u) = fewer.tri_uvs.as_mut() {
+            u.pop();
+        }
+        let e = g
+            .set_scene(&Renderer::new(&fewer, camera, s).expect("renderer"))
+            .expect_err("another triangle count");
+        assert!(matches!(e, RenderError::Unsupported(_)), "{e}");
+    }
+
     /// An image with more pixels than one dispatch of the trace takes is
     /// refused with the sizes, not rendered in part.
     #[test]

@@ -90,6 +90,18 @@ pub struct Transfers {
     pub bytes_read: u64,
 }
 
+impl Transfers {
+    /// What was added since `before` (an earlier reading of the same renderer).
+    pub fn since(self, before: Transfers) -> Transfers {
+        Transfers {
+            submissions: self.submissions - before.submissions,
+            read_backs: self.read_backs - before.read_backs,
+            bytes_written: self.bytes_written - before.bytes_written,
+            bytes_read: self.bytes_read - before.bytes_read,
+        }
+    }
+}
+
 struct Pipelines {
     camera: wgpu::ComputePipeline,
     /// `direct_visibility`'s `confirm` and `settle`, with their bind group;
@@ -265,6 +277,53 @@ fn tri_gpu(r: &Renderer<'_>) -> Vec<TriGpu> {
         .collect()
 }
 
+/// The lights as `shade` reads them: the area lights (with their CDF), then
+/// the punctual ones.
+fn light_table(r: &Renderer<'_>) -> Vec<LightGpu> {
+    let (s, l) = (r.scene, &r.lights);
+    let mut lights: Vec<LightGpu> = l
+        .area
+        .iter()
+        .zip(l.cdf())
+        .map(|(a, &cdf)| LightGpu {
+            kind: 0,
+            color: s
+                .material_of(a.prim as usize)
+                .map_or([0.0; 3], |m| m.emissive),
+            prim: a.prim,
+            area: a.area,
+            cdf,
+            ..LightGpu::default()
+        })
+        .collect();
+    lights.extend(l.punctual.iter().map(|p| {
+        let (kind, direction, cos_inner, cos_outer) = match p.kind {
+            LightKind::Point => (1, p.direction, 1.0, 1.0),
+            LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            } => (
+                2,
+                p.direction.normalize_or(Vec3::NEG_Z),
+                inner_cone.cos(),
+                outer_cone.cos(),
+            ),
+            LightKind::Directional => (3, p.direction.normalize_or(Vec3::NEG_Y), 1.0, 1.0),
+        };
+        LightGpu {
+            position: p.position.to_array(),
+            kind,
+            direction: direction.to_array(),
+            range: p.range.filter(|r| *r > 0.0).unwrap_or(0.0),
+            color: (Vec3::from_array(p.color) * p.intensity).to_array(),
+            cos_inner,
+            cos_outer,
+            ..LightGpu::default()
+        }
+    }));
+    lights
+}
+
 impl SceneBuffers {
     fn new(gpu: &Gpu, r: &Renderer<'_>) -> Self {
         let s = r.scene;
@@ -300,57 +359,18 @@ impl SceneBuffers {
             })
             .collect();
         let l = &r.lights;
-        let mut lights: Vec<LightGpu> = l
-            .area
-            .iter()
-            .zip(l.cdf())
-            .map(|(a, &cdf)| LightGpu {
-                kind: 0,
-                color: s
-                    .material_of(a.prim as usize)
-                    .map_or([0.0; 3], |m| m.emissive),
-                prim: a.prim,
-                area: a.area,
-                cdf,
-                ..LightGpu::default()
-            })
-            .collect();
-        lights.extend(l.punctual.iter().map(|p| {
-            let (kind, direction, cos_inner, cos_outer) = match p.kind {
-                LightKind::Point => (1, p.direction, 1.0, 1.0),
-                LightKind::Spot {
-                    inner_cone,
-                    outer_cone,
-                } => (
-                    2,
-                    p.direction.normalize_or(Vec3::NEG_Z),
-                    inner_cone.cos(),
-                    outer_cone.cos(),
-                ),
-                LightKind::Directional => (3, p.direction.normalize_or(Vec3::NEG_Y), 1.0, 1.0),
-            };
-            LightGpu {
-                position: p.position.to_array(),
-                kind,
-                direction: direction.to_array(),
-                range: p.range.filter(|r| *r > 0.0).unwrap_or(0.0),
-                color: (Vec3::from_array(p.color) * p.intensity).to_array(),
-                cos_inner,
-                cos_outer,
-                ..LightGpu::default()
-            }
-        }));
+        let lights = light_table(r);
         Self {
             tris: storage(
                 gpu,
                 "render triangles",
                 &tri_gpu(r),
-                wgpu::BufferUsages::empty(),
+                wgpu::BufferUsages::COPY_DST,
             ),
             materials: storage(gpu, "materials", &materials, wgpu::BufferUsages::empty()),
             textures: storage(gpu, "textures", &table, wgpu::BufferUsages::empty()),
             texels: storage(gpu, "texels", &texels, wgpu::BufferUsages::empty()),
-            lights: storage(gpu, "lights", &lights, wgpu::BufferUsages::empty()),
+            lights: storage(gpu, "lights", &lights, wgpu::BufferUsages::COPY_DST),
             n_area: l.area.len() as u32,
             n_punctual: l.punctual.len() as u32,
             n_materials: materials.len() as u32,
@@ -405,6 +425,8 @@ pub struct GpuRenderer<'g> {
     /// What `params` holds (the camera is rewritten by [`GpuRenderer::set_camera`]).
     params_value: RenderParams,
     params: wgpu::Buffer,
+    /// The scene's tables (rewritten by [`GpuRenderer::set_scene`]).
+    scene: SceneBuffers,
     n: u32,
     grid: [u32; 3],
     bounces: u32,
@@ -658,6 +680,7 @@ impl<'g> GpuRenderer<'g> {
                 trace,
                 params_value,
                 params,
+                scene,
                 n,
                 grid: [x, groups.div_ceil(x), 1],
                 bounces,
@@ -918,6 +941,43 @@ impl<'g> GpuRenderer<'g> {
         }
         self.restart();
         Ok(())
+    }
+
+    /// Another pose of the scene this renderer was made for (the same
+    /// triangles, materials and lights, moved: an animation's next frame),
+    /// seen by `r`'s camera: the triangle and light tables, the scene's
+    /// parameters and the candidates are written, nothing is compiled or
+    /// made again, and the image starts over. A pose with another triangle
+    /// or light count is refused ([`RenderError::Unsupported`]: make a new
+    /// renderer).
+    pub fn set_scene(&mut self, r: &Renderer<'_>) -> Result<(), RenderError> {
+        let tris = tri_gpu(r);
+        let lights = light_table(r);
+        let counts = (
+            tris.len(),
+            r.lights.area.len() as u32,
+            r.lights.punctual.len() as u32,
+        );
+        let p = &self.params_value;
+        if counts != (p.n_tris as usize, p.n_area, p.n_punctual) {
+            return Err(RenderError::Unsupported(format!(
+                "a pose with {} triangles and {}+{} lights on a renderer made for {} and {}+{}: make a new one",
+                counts.0, counts.1, counts.2, p.n_tris, p.n_area, p.n_punctual
+            )));
+        }
+        let q = &self.gpu.queue;
+        q.write_buffer(&self.scene.tris, 0, bytemuck::cast_slice(&tris));
+        if !lights.is_empty() {
+            q.write_buffer(&self.scene.lights, 0, bytemuck::cast_slice(&lights));
+        }
+        self.transfers.bytes_written += (std::mem::size_of::<TriGpu>() * tris.len()
+            + std::mem::size_of::<LightGpu>() * lights.len())
+            as u64;
+        // What depends on the pose: the scale's offset and AO radius, the lights' odds.
+        self.params_value.offset = r.offset;
+        self.params_value.ao_radius = r.ao_radius;
+        self.params_value.p_area = r.lights.p_area;
+        self.set_camera(r)
     }
 
     /// The counters of the samples added since the last restart (one
