@@ -284,5 +284,54 @@ fn gpu_shading_from_the_command_line_agrees_with_the_cpu() {
     let (err, pt_gpu) = run("pt-gpu", &["--backend", "gpu"]);
     assert!(err.contains("shaded on the GPU"), "{err}");
     assert!(pt_gpu.pixels.iter().flatten().any(|&c| c > 0.0));
+
+    // An animation: one GPU renderer for every frame, each pose rewriting its
+    // tables; each frame is the host-shaded frame's to rounding.
+    let frames = |name: &str, extra: &[&str]| {
+        let pattern = d.join(format!("{name}/f_%d.exr"));
+        let png = d.join(format!("{name}/f_%d.png"));
+        let mut args = vec![
+            "render",
+            SKIN,
+            "--frames",
+            "0..2",
+            "--fps",
+            "2",
+            "--backend",
+            "gpu",
+            "-o",
+            png.to_str().expect("utf-8"),
+            "--exr",
+            pattern.to_str().expect("utf-8"),
+        ];
+        args.extend(SMALL);
+        args.extend(extra);
+        let out = dirt(&args);
+        let err = text(&out.stderr);
+        assert!(out.status.success(), "{name}: {err}");
+        let images: Vec<dirt_render::Image> = (0..3)
+            .map(|n| {
+                dirt_render::Image::read_exr(&d.join(format!("{name}/f_{n}.exr")))
+                    .expect("frame exr")
+            })
+            .collect();
+        (err, images)
+    };
+    let (err, on_gpu) = frames("anim-gpu", &[]);
+    assert_eq!(
+        err.matches("the renderer kept, its scene tables rewritten")
+            .count(),
+        2,
+        "{err}"
+    );
+    let (_, on_host) = frames("anim-host", &["--host-shading"]);
+    assert_ne!(on_gpu[0].bits(), on_gpu[2].bits(), "the pose moved nothing");
+    for (n, (g, h)) in on_gpu.iter().zip(&on_host).enumerate() {
+        let (mg, mh) = (dirt_render::metrics::mean(g), dirt_render::metrics::mean(h));
+        assert!(
+            (mg - mh).abs() <= 0.01 * mh.abs().max(1e-3),
+            "frame {n}: mean {mg} on the GPU, {mh} on the host"
+        );
+    }
     let _ = fs::remove_dir_all(&d);
 }

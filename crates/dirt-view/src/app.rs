@@ -61,6 +61,9 @@ pub struct App<'g> {
     shaded: Option<GpuRenderer<'g>>,
     /// Samples per pixel in the GPU renderer's sums, and when they started.
     gpu_samples: u32,
+    /// The scene was posed since the GPU renderer last restarted: its
+    /// triangle and light tables are rewritten, not just the camera.
+    posed: bool,
     gpu_start: Instant,
     device: &'g Device,
     window: Option<Arc<Window>>,
@@ -99,16 +102,11 @@ impl<'g> App<'g> {
         device: &'g Device,
     ) -> Result<Self, ViewError> {
         let shade_on_gpu = matches!(tracer, ViewTracer::Gpu(_)) && !options.host_shading;
-        if shade_on_gpu && scene.is_animated() {
-            eprintln!(
-                "dirt view: the scene moves: shaded on the host, the image uploaded each frame (DIRT traces on the GPU)"
-            );
-        } else if shade_on_gpu {
+        if shade_on_gpu {
             eprintln!(
                 "dirt view: shaded on the GPU, the image presented where it lies (no read-back)"
             );
         }
-        let shade_on_gpu = shade_on_gpu && !scene.is_animated();
         let (w, h) = options.internal_size(options.width, options.height);
         let orbit = crate::start_camera(&options, &scene.scene, w as f32 / h as f32)?;
         let clock = Clock {
@@ -129,6 +127,7 @@ impl<'g> App<'g> {
             shade_on_gpu,
             shaded: None,
             gpu_samples: 0,
+            posed: false,
             gpu_start: Instant::now(),
             device,
             window: None,
@@ -187,10 +186,17 @@ impl<'g> App<'g> {
         if self.gpu_samples == 0 {
             let settings = self.options.settings(w, h);
             let renderer = Renderer::new(&self.scene.scene, self.orbit.camera()?, settings)?;
-            match self.shaded.as_mut() {
-                Some(g) => g.set_camera(&renderer)?,
-                None => self.shaded = Some(GpuRenderer::new(t.gpu(), &renderer)?),
+            // A new pose rewrites the scene's tables, a new camera only the
+            // camera's; what cannot be rewritten (another size) is made again.
+            let kept = match self.shaded.as_mut() {
+                Some(g) if self.posed => g.set_scene(&renderer).is_ok(),
+                Some(g) => g.set_camera(&renderer).is_ok(),
+                None => false,
+            };
+            if !kept {
+                self.shaded = Some(GpuRenderer::new(t.gpu(), &renderer)?);
             }
+            self.posed = false;
             self.gpu_start = Instant::now();
         }
         let ads = t
@@ -232,6 +238,8 @@ impl<'g> App<'g> {
             // The triangles moved: DIRT is rebuilt (same parameters), the image restarts.
             self.tracer.as_tracer().build(&self.scene.scene.triangles)?;
             self.accum.reset();
+            self.gpu_samples = 0;
+            self.posed = true;
         }
         if self.moved {
             self.accum.reset();

@@ -122,26 +122,54 @@ impl RenderTracer<'_> {
     }
 }
 
+/// Whether the image is shaded on the GPU, and the GPU renderer kept from
+/// frame to frame: an animation's next pose rewrites its tables
+/// (`GpuRenderer::set_scene`), nothing is compiled or made again.
+struct Shading<'g> {
+    on_gpu: bool,
+    kept: Option<dirt_render::gpu::GpuRenderer<'g>>,
+}
+
 /// Renders every sample: on the GPU when the tracer is DIRT on the GPU and
-/// shading there was not declined (`shade_on_gpu`), else through the CPU renderer.
-fn render_image(
+/// shading there was not declined (`shading.on_gpu`), else through the CPU
+/// renderer.
+fn render_image<'g>(
     renderer: &Renderer,
-    tracer: &mut RenderTracer,
-    shade_on_gpu: bool,
+    tracer: &mut RenderTracer<'g>,
+    shading: &mut Shading<'g>,
     progress: &mut dyn FnMut(&dirt_render::Progress),
 ) -> Result<dirt_render::Rendered> {
-    if let (RenderTracer::Gpu(t), true) = (&mut *tracer, shade_on_gpu) {
+    if let (RenderTracer::Gpu(t), true) = (&mut *tracer, shading.on_gpu) {
         let gpu = t.gpu();
         let traversal = t.traversal;
         let ads = t.ads().context("DIRT on the GPU is not built")?;
-        let mut g = dirt_render::gpu::GpuRenderer::new(gpu, renderer)
-            .context("cannot set up the GPU renderer")?;
+        let made = || {
+            dirt_render::gpu::GpuRenderer::new(gpu, renderer)
+                .context("cannot set up the GPU renderer")
+        };
+        let (mut g, kept) = match shading.kept.take() {
+            Some(mut g) => match g.set_scene(renderer) {
+                Ok(()) => (g, true),
+                Err(_) => (made()?, false),
+            },
+            None => (made()?, false),
+        };
+        let before = g.transfers();
         let rendered = g.render(ads, traversal, progress)?;
-        let x = g.transfers();
+        let x = g.transfers().since(before);
         eprintln!(
-            "shaded on the GPU: {} submissions, {} read-back ({} bytes), {} bytes written after the upload",
-            x.submissions, x.read_backs, x.bytes_read, x.bytes_written
+            "shaded on the GPU{}: {} submissions, {} read-back ({} bytes), {} bytes written after the upload",
+            if kept {
+                " (the renderer kept, its scene tables rewritten)"
+            } else {
+                ""
+            },
+            x.submissions,
+            x.read_backs,
+            x.bytes_read,
+            x.bytes_written
         );
+        shading.kept = Some(g);
         return Ok(rendered);
     }
     Ok(renderer.render(tracer.as_tracer(), progress)?)
@@ -338,7 +366,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             (RenderBackend::Brute, _) => RenderTracer::Other(Box::new(Brute::new(tris))),
         }
     };
-    let shade_on_gpu = matches!(tracer, RenderTracer::Gpu(_)) && !args.host_shading;
+    let mut shading = Shading {
+        on_gpu: matches!(tracer, RenderTracer::Gpu(_)) && !args.host_shading,
+        kept: None,
+    };
     let first_build = kept.unwrap_or_else(|| build.elapsed());
     eprintln!(
         "scene {}: {} triangles; {}x{}, {} spp, {} bounces, mode {:?}; tracer {} ({})",
@@ -374,7 +405,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             args,
             &renderer,
             &mut tracer,
-            shade_on_gpu,
+            &mut shading,
             &args.out,
             args.exr.as_deref(),
         );
@@ -416,7 +447,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         let rendered = render_quiet(
             &renderer,
             &mut tracer,
-            shade_on_gpu,
+            &mut shading,
             &out,
             exr.as_deref(),
             args.exposure,
@@ -452,15 +483,15 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 }
 
 /// Renders one frame without a progress bar, writes it, and returns it.
-fn render_quiet(
+fn render_quiet<'g>(
     renderer: &Renderer,
-    tracer: &mut RenderTracer,
-    shade_on_gpu: bool,
+    tracer: &mut RenderTracer<'g>,
+    shading: &mut Shading<'g>,
     out: &Path,
     exr: Option<&Path>,
     exposure: f32,
 ) -> Result<dirt_render::Rendered> {
-    let rendered = render_image(renderer, tracer, shade_on_gpu, &mut |_| {})?;
+    let rendered = render_image(renderer, tracer, shading, &mut |_| {})?;
     write_images(&rendered, out, exr, exposure)?;
     Ok(rendered)
 }
@@ -516,11 +547,11 @@ fn write_gif(path: &Path, frames: &[Vec<u8>], width: u32, height: u32, fps: f32)
 }
 
 /// A single image with a progress bar and the summary line.
-fn render_one(
+fn render_one<'g>(
     args: &RenderArgs,
     renderer: &Renderer,
-    tracer: &mut RenderTracer,
-    shade_on_gpu: bool,
+    tracer: &mut RenderTracer<'g>,
+    shading: &mut Shading<'g>,
     out: &Path,
     exr: Option<&Path>,
 ) -> Result<()> {
@@ -537,7 +568,7 @@ fn render_one(
         )
         .context("progress template")?,
     );
-    let rendered = render_image(renderer, tracer, shade_on_gpu, &mut |p| {
+    let rendered = render_image(renderer, tracer, shading, &mut |p| {
         let secs = p.elapsed.as_secs_f64();
         let mrays = if secs > 0.0 {
             p.rays as f64 / secs / 1e6

@@ -44,7 +44,7 @@ pub struct ViewArgs {
     backend: ViewBackend,
     /// With DIRT on the GPU: shade on the host and upload the image each
     /// frame, instead of shading on the GPU and presenting the sums where
-    /// they lie (an animated scene is always shaded on the host).
+    /// they lie.
     #[arg(long)]
     host_shading: bool,
     /// How DIRT walks the tiles a ray crosses.
