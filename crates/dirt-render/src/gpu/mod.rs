@@ -24,7 +24,9 @@
 //! rounding flips a decision — a roulette draw, a ray grazing an edge — goes
 //! its own way), not to the bit.
 //!
-//! Left out: the browser (the renderer waits for its one read-back).
+//! Left out: the browser page (it shades on the host); [`GpuRenderer::render`]
+//! and [`GpuRenderer::counters`] block on their read-back, which a page
+//! cannot ([`GpuRenderer::add_sample`] does not).
 //! Each secondary trace runs on the live rays packed to the front of its ray
 //! buffer (`shift`'s `compact` and `expand`, an atomic counter,
 //! `RenderState::live`); the counter sizes the trace's first dispatch
