@@ -2,7 +2,7 @@
 //! reference give the same image, and bad input is an error, not a panic.
 
 use std::fs;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 const DIRT: &str = env!("CARGO_BIN_EXE_dirt");
@@ -36,6 +36,25 @@ const SMALL: [&str; 8] = [
     "--bounces",
     "2",
 ];
+
+/// `dirt render` with `first`, writing `png` and `exr`, at the small size,
+/// then `extra`; it must succeed. Its stderr.
+fn render_small(first: &[&str], png: &Path, exr: &Path, extra: &[&str]) -> String {
+    let mut args = vec!["render"];
+    args.extend(first);
+    args.extend([
+        "-o",
+        png.to_str().expect("utf-8"),
+        "--exr",
+        exr.to_str().expect("utf-8"),
+    ]);
+    args.extend(SMALL);
+    args.extend(extra);
+    let out = dirt(&args);
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{args:?}: {err}");
+    err
+}
 
 #[test]
 fn render_writes_png_and_exr_and_backends_agree() {
@@ -76,22 +95,7 @@ fn render_without_scene_uses_the_default_and_camera_overrides_work() {
     let a = d.join("a.exr");
     let b = d.join("b.exr");
     let png = d.join("x.png");
-    let run = |extra: &[&str], exr: &PathBuf| {
-        let mut args = vec![
-            "render",
-            "--backend",
-            "cpu",
-            "-o",
-            png.to_str().expect("utf-8"),
-            "--exr",
-            exr.to_str().expect("utf-8"),
-        ];
-        args.extend(SMALL);
-        args.extend(extra);
-        let out = dirt(&args);
-        assert!(out.status.success(), "{}", text(&out.stderr));
-        text(&out.stderr)
-    };
+    let run = |extra: &[&str], exr: &PathBuf| render_small(&["--backend", "cpu"], &png, exr, extra);
     let err = run(&[], &a);
     assert!(err.contains("scene cornell"), "{err}");
     run(
@@ -242,24 +246,12 @@ fn gpu_shading_from_the_command_line_agrees_with_the_cpu() {
         return;
     }
     let d = dir("gpu-shading");
+    // The test's environment reaches the child: WGPU_BACKEND picks the adapter.
     let run = |name: &str, extra: &[&str]| {
         let exr = d.join(format!("{name}.exr"));
-        let png = d.join(format!("{name}.png"));
-        let mut args = vec![
-            "render",
-            "cornell",
-            "-o",
-            png.to_str().expect("utf-8"),
-            "--exr",
-            exr.to_str().expect("utf-8"),
-        ];
-        args.extend(SMALL);
-        args.extend(extra);
-        // The test's environment reaches the child: WGPU_BACKEND picks the adapter.
-        let out = dirt(&args);
-        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+        let err = render_small(&["cornell"], &d.join(format!("{name}.png")), &exr, extra);
         let img = dirt_render::Image::read_exr(&exr).expect("exr readable");
-        (text(&out.stderr), img)
+        (err, img)
     };
     let (err, ao_gpu) = run("ao-gpu", &["--mode", "ao", "--backend", "gpu"]);
     assert!(
@@ -288,27 +280,12 @@ fn gpu_shading_from_the_command_line_agrees_with_the_cpu() {
     // An animation: one GPU renderer for every frame, each pose rewriting its
     // tables; each frame is the host-shaded frame's to rounding.
     let frames = |name: &str, extra: &[&str]| {
-        let pattern = d.join(format!("{name}/f_%d.exr"));
-        let png = d.join(format!("{name}/f_%d.png"));
-        let mut args = vec![
-            "render",
-            SKIN,
-            "--frames",
-            "0..2",
-            "--fps",
-            "2",
-            "--backend",
-            "gpu",
-            "-o",
-            png.to_str().expect("utf-8"),
-            "--exr",
-            pattern.to_str().expect("utf-8"),
-        ];
-        args.extend(SMALL);
-        args.extend(extra);
-        let out = dirt(&args);
-        let err = text(&out.stderr);
-        assert!(out.status.success(), "{name}: {err}");
+        let err = render_small(
+            &[SKIN, "--frames", "0..2", "--fps", "2", "--backend", "gpu"],
+            &d.join(format!("{name}/f_%d.png")),
+            &d.join(format!("{name}/f_%d.exr")),
+            extra,
+        );
         let images: Vec<dirt_render::Image> = (0..3)
             .map(|n| {
                 dirt_render::Image::read_exr(&d.join(format!("{name}/f_{n}.exr")))
