@@ -202,3 +202,27 @@ fn each_library_crate_has_one_error_enum() {
         );
     }
 }
+
+/// `create_buffer_init` panics on a lost device; the library crates make
+/// their buffers with `dirt_gpu::buffer_init` (the queue writes them), so a
+/// lost device is an error (ARCHITECTURE, "Faults are errors").
+#[test]
+fn no_library_crate_creates_a_buffer_that_panics_on_a_lost_device() {
+    for name in [
+        "dirt-gpu",
+        "dirt-render",
+        "dirt-eval",
+        "dirt-view",
+        "dirt-web",
+        "dirt-cli",
+    ] {
+        for (path, text) in sources(name) {
+            let calls = text
+                .lines()
+                .map(|line| line.split("//").next().unwrap_or(""))
+                .filter(|code| code.contains("create_buffer_init"))
+                .count();
+            assert_eq!(calls, 0, "{} calls create_buffer_init", path.display());
+        }
+    }
+}

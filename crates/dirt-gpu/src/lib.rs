@@ -347,13 +347,9 @@ pub(crate) fn uniform_init(gpu: &Gpu, label: &str, data: &[u8]) -> wgpu::Buffer 
 
 /// A buffer holding `data`, written through the queue (it also gets
 /// `COPY_DST`). Not wgpu's `create_buffer_init`: that panics when the device
-/// is lost, where this leaves an error for [`Gpu::scoped`] to report.
-pub(crate) fn buffer_init(
-    gpu: &Gpu,
-    label: &str,
-    data: &[u8],
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
+/// is lost, where this leaves an error for [`Gpu::scoped`] to report. Public
+/// for the passes of the crates above (the GPU renderer's tables).
+pub fn buffer_init(gpu: &Gpu, label: &str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
     let size = (data.len() as u64).max(4).div_ceil(4) * 4;
     let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),

@@ -38,7 +38,6 @@ pub mod types;
 use crate::direct_visibility::VisibilityStats;
 use crate::{Image, Mode, RenderError, Rendered, Renderer};
 use dirt_core::Traversal;
-use dirt_gpu::wgpu::util::DeviceExt;
 use dirt_gpu::{Gpu, GpuAds, GpuError, TraceResources, wgpu};
 use dirt_math::{Hit, Ray, Vec3};
 use dirt_scene::LightKind;
@@ -212,12 +211,13 @@ fn storage<T: bytemuck::Pod + Default>(
 ) -> wgpu::Buffer {
     let one = [T::default()];
     let data = if data.is_empty() { &one[..] } else { data };
-    gpu.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytemuck::cast_slice(data),
-            usage: wgpu::BufferUsages::STORAGE | extra,
-        })
+    // Not `create_buffer_init`: it panics on a lost device.
+    dirt_gpu::buffer_init(
+        gpu,
+        label,
+        bytemuck::cast_slice(data),
+        wgpu::BufferUsages::STORAGE | extra,
+    )
 }
 
 fn zeroed(gpu: &Gpu, label: &str, bytes: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
@@ -500,13 +500,12 @@ impl<'g> GpuRenderer<'g> {
             };
             params.set_camera(&r.camera);
             let params_value = params;
-            let params = gpu
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("render params"),
-                    contents: bytemuck::bytes_of(&params),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                });
+            let params = dirt_gpu::buffer_init(
+                gpu,
+                "render params",
+                bytemuck::bytes_of(&params),
+                wgpu::BufferUsages::UNIFORM,
+            );
             let n64 = u64::from(n);
             let copy = wgpu::BufferUsages::COPY_SRC;
             let state = zeroed(
