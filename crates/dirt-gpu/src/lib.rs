@@ -451,7 +451,7 @@ pub fn read_back(
 }
 
 /// [`read_back`] without blocking: the form a browser page awaits.
-pub(crate) async fn read_back_async(
+pub async fn read_back_async(
     gpu: &Gpu,
     src: &wgpu::Buffer,
     offset: u64,

@@ -886,6 +886,9 @@ mod on_gpu {
                 .map(f32::to_bits)
                 .collect();
             assert_eq!(got, want.image.bits(), "the sums of the samples");
+            // The browser's form: the mean and the counters in one read-back, awaited.
+            let (mean, _) = pollster::block_on(g.mean_async(s.spp)).expect("mean");
+            assert_eq!(mean.bits(), want.image.bits(), "the mean read back");
             let c = g.counters().expect("counters");
             assert_eq!(
                 u64::from(c.rays_lo) | (u64::from(c.rays_hi) << 32),

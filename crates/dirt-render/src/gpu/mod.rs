@@ -24,9 +24,9 @@
 //! rounding flips a decision — a roulette draw, a ray grazing an edge — goes
 //! its own way), not to the bit.
 //!
-//! Left out: the browser page (it shades on the host); [`GpuRenderer::render`]
-//! and [`GpuRenderer::counters`] block on their read-back, which a page
-//! cannot ([`GpuRenderer::add_sample`] does not).
+//! In a browser page, which cannot block: [`GpuRenderer::add_sample`] and
+//! [`GpuRenderer::mean_async`] ([`GpuRenderer::render`] and
+//! [`GpuRenderer::counters`] block on their read-back).
 //! Each secondary trace runs on the live rays packed to the front of its ray
 //! buffer (`shift`'s `compact` and `expand`, an atomic counter,
 //! `RenderState::live`); the counter sizes the trace's first dispatch
@@ -992,6 +992,65 @@ impl<'g> GpuRenderer<'g> {
         Ok(state)
     }
 
+    /// Copies the sums and the counters into one staging buffer (recorded
+    /// and submitted): what a read-back of the image takes.
+    fn encode_result(&mut self) -> wgpu::Buffer {
+        let n = u64::from(self.n);
+        let staging = zeroed(
+            self.gpu,
+            "render result",
+            n * 16 + STATE_BYTES,
+            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
+        let mut enc = self.gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&self.sum, 0, &staging, 0, n * 16);
+        enc.copy_buffer_to_buffer(&self.state, 0, &staging, n * 16, STATE_BYTES);
+        self.submit(enc);
+        staging
+    }
+
+    /// The mean of `samples` samples and the counters, from the bytes of
+    /// [`GpuRenderer::encode_result`]'s buffer; hits that were not hits are
+    /// an error.
+    fn mean_of(&self, bytes: &[u8], samples: u32) -> Result<(Image, RenderState), RenderError> {
+        let n = self.n as usize * 16;
+        if bytes.len() < n + STATE_BYTES as usize {
+            return Err(RenderError::Gpu(GpuError::Readback(format!(
+                "{} bytes read back for {n} of sums and the counters",
+                bytes.len()
+            ))));
+        }
+        let (sums, state) = bytes.split_at(n);
+        let state: RenderState = bytemuck::pod_read_unaligned(&state[..STATE_BYTES as usize]);
+        check_counters(&state)?;
+        let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(sums);
+        let inv = if samples == 0 {
+            0.0
+        } else {
+            1.0 / samples as f32
+        };
+        let image = Image {
+            width: self.width,
+            height: self.height,
+            pixels: sums
+                .iter()
+                .map(|s| (Vec3::new(s[0], s[1], s[2]) * inv).to_array())
+                .collect(),
+        };
+        Ok((image, state))
+    }
+
+    /// The mean of the `samples` samples added since the last restart and
+    /// the counters, in one read-back that does not block: the form a
+    /// browser page awaits (it draws the mean on a 2D canvas).
+    pub async fn mean_async(&mut self, samples: u32) -> Result<(Image, RenderState), RenderError> {
+        let staging = self.encode_result();
+        self.transfers.read_backs += 1;
+        self.transfers.bytes_read += staging.size();
+        let bytes = dirt_gpu::read_back_async(self.gpu, &staging, 0, staging.size()).await?;
+        self.mean_of(&bytes, samples)
+    }
+
     /// Renders every sample through `ads` (built from the renderer's
     /// triangles) and reads the image back once. `progress` is called after
     /// each sample is submitted (not finished: the GPU runs ahead).
@@ -1033,31 +1092,10 @@ impl<'g> GpuRenderer<'g> {
             Ok(())
         })?;
         // One read-back: the image's sums and the counters behind them.
+        let staging = self.encode_result();
+        let bytes = self.read(&staging, staging.size())?;
+        let (image, state) = self.mean_of(&bytes, self.spp)?;
         let n = u64::from(self.n);
-        let staging = zeroed(
-            gpu,
-            "render result",
-            n * 16 + STATE_BYTES,
-            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        );
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(&self.sum, 0, &staging, 0, n * 16);
-        enc.copy_buffer_to_buffer(&self.state, 0, &staging, n * 16, STATE_BYTES);
-        self.submit(enc);
-        let bytes = self.read(&staging, n * 16 + STATE_BYTES)?;
-        let (sums, state) = bytes.split_at(n as usize * 16);
-        let state: RenderState = bytemuck::pod_read_unaligned(&state[..STATE_BYTES as usize]);
-        check_counters(&state)?;
-        let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(sums);
-        let inv = 1.0 / self.spp as f32;
-        let image = Image {
-            width: self.width,
-            height: self.height,
-            pixels: sums
-                .iter()
-                .map(|s| (Vec3::new(s[0], s[1], s[2]) * inv).to_array())
-                .collect(),
-        };
         let confirmed = u64::from(state.confirmed_lo) | (u64::from(state.confirmed_hi) << 32);
         Ok(Rendered {
             image,
