@@ -178,6 +178,8 @@ def main():
             sys.exit(f"FAIL: {state['samples']} of {a.spp} samples after {took:.0f} s")
         if a.backend == "gpu" and "on WebGPU" not in state["status"]:
             sys.exit(f"FAIL: asked for the GPU, the page says: {state['status']}")
+        if a.backend == "gpu" and "shaded on the GPU" not in state["status"]:
+            sys.exit(f"FAIL: the page does not shade on the GPU: {state['status']}")
         print(f"page: {state['samples']} samples in {took:.1f} s (page load, device, build and passes)")
         canvas = wd(base, "POST", s + "/element", {"using": "css selector", "value": "#view"})
         eid = next(iter(canvas.values()))

@@ -210,9 +210,14 @@ impl WebPage {
                 },
             };
             format!(
-                "{} triangles, {w}x{h}, {} on {on}",
+                "{} triangles, {w}x{h}, {} on {on}{}",
                 p.triangles(),
-                dirt_render::AsyncTrace::name(p.backend())
+                dirt_render::AsyncTrace::name(p.backend()),
+                if p.shaded_on_gpu() {
+                    "; shaded on the GPU, one read-back a sample"
+                } else {
+                    ""
+                }
             )
         })
     }

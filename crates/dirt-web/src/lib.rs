@@ -1,11 +1,13 @@
 //! dirt-web: DIRT in a browser page.
 //!
 //! [`Page`] path-traces a scene progressively: each step renders one sample
-//! pass with `dirt-render` through a [`Backend`] — `dirt-gpu` on the page's
-//! WebGPU device (the frame build and the trace, awaited: a browser resolves
-//! read-backs on its event loop), or `dirt-cpu` compiled to wasm where the
-//! browser has no WebGPU — and adds it to the running mean, which
-//! [`Page::rgba`] tone-maps as `dirt render`'s PNG is. [`check`] measures the
+//! pass and adds it to the running mean, which [`Page::rgba`] tone-maps as
+//! `dirt render`'s PNG is. On the page's WebGPU device the whole sample runs
+//! there (`dirt_render::gpu`: the frame build, the traces and the shading,
+//! one submission) and the mean comes back in one read-back per step,
+//! awaited (a browser resolves read-backs on its event loop); where the
+//! browser has no WebGPU, `dirt-render` traces through `dirt-cpu` compiled
+//! to wasm ([`Backend`]). [`check`] measures the
 //! portable path: a GPU build and trace against the CPU reference and brute
 //! force over the same triangles and rays, bit for bit ([`compare`]).
 //!
@@ -21,6 +23,7 @@ use dirt_cpu::DirtCpu;
 use dirt_gpu::{DirtGpu, Gpu, GpuError};
 use dirt_math::{Hit, Ray, RayStats, Triangle};
 use dirt_render::accum::Accumulator;
+use dirt_render::gpu::GpuRenderer;
 use dirt_render::orbit::Orbit;
 use dirt_render::{AsyncTrace, RenderError, Renderer, Settings};
 use dirt_scene::{Scene, SceneError};
@@ -140,6 +143,12 @@ pub struct Page {
     settings: Settings,
     accum: Accumulator,
     backend: Backend,
+    /// With the GPU backend: the renderer that shades there (made for the
+    /// first step, pointed at each new camera), its samples since the
+    /// camera moved, and their mean as last read back.
+    shaded: Option<GpuRenderer<'static>>,
+    gpu_samples: u32,
+    gpu_mean: Option<dirt_render::Image>,
     /// Rays traced since the camera last moved, and the time their sample passes took.
     rays: u64,
     busy: Duration,
@@ -177,6 +186,9 @@ impl Page {
             settings,
             accum: Accumulator::new(width, height),
             backend,
+            shaded: None,
+            gpu_samples: 0,
+            gpu_mean: None,
             rays: 0,
             busy: Duration::ZERO,
             last_rate: 0.0,
@@ -185,6 +197,38 @@ impl Page {
 
     /// Renders one more sample pass and adds it to the mean.
     pub async fn step(&mut self) -> Result<(), WebError> {
+        if let Backend::Gpu(t) = &self.backend {
+            let start = Instant::now();
+            if self.gpu_samples == 0 {
+                let renderer = Renderer::new(&self.scene, self.orbit.camera()?, self.settings)?;
+                let kept = match self.shaded.as_mut() {
+                    Some(g) => g.set_camera(&renderer).is_ok(),
+                    None => false,
+                };
+                if !kept {
+                    self.shaded = Some(GpuRenderer::new(t.gpu(), &renderer)?);
+                }
+            }
+            let ads = t.ads().ok_or_else(|| {
+                WebError::Trace(dirt_core::CoreError::NotBuilt {
+                    tracer: "dirt-gpu".into(),
+                })
+            })?;
+            let Some(g) = self.shaded.as_mut() else {
+                return Err(WebError::NoWebGpu("the GPU renderer was not made".into()));
+            };
+            g.add_sample(ads, t.traversal, self.gpu_samples)?;
+            self.gpu_samples += 1;
+            // One read-back a step: the mean to draw, and the rays behind it.
+            let (mean, counters) = g.mean_async(self.gpu_samples).await?;
+            let rays = u64::from(counters.rays_lo) | (u64::from(counters.rays_hi) << 32);
+            let took = start.elapsed();
+            self.last_rate = rays.saturating_sub(self.rays) as f64 / took.as_secs_f64().max(1e-9);
+            self.rays = rays;
+            self.busy += took;
+            self.gpu_mean = Some(mean);
+            return Ok(());
+        }
         let start = Instant::now();
         let renderer = Renderer::new(&self.scene, self.orbit.camera()?, self.settings)?;
         let pass = renderer
@@ -201,18 +245,36 @@ impl Page {
     /// Forgets the passes (after the camera moved).
     pub fn restart(&mut self) {
         self.accum.reset();
+        self.gpu_samples = 0;
+        self.gpu_mean = None;
         self.rays = 0;
         self.busy = Duration::ZERO;
     }
 
     /// The mean so far as 8-bit sRGBA, rows top to bottom (as `dirt render`'s PNG).
     pub fn rgba(&self) -> Vec<u8> {
-        self.accum.rgba8(0.0)
+        match &self.gpu_mean {
+            Some(m) => m
+                .to_srgb8(0.0)
+                .chunks_exact(3)
+                .flat_map(|c| [c[0], c[1], c[2], 255])
+                .collect(),
+            None => self.accum.rgba8(0.0),
+        }
+    }
+
+    /// Whether the samples are shaded on the GPU (the GPU backend).
+    pub fn shaded_on_gpu(&self) -> bool {
+        matches!(self.backend, Backend::Gpu(_))
     }
 
     /// Sample passes in the mean.
     pub fn samples(&self) -> u32 {
-        self.accum.samples
+        if self.shaded_on_gpu() {
+            self.gpu_samples
+        } else {
+            self.accum.samples
+        }
     }
 
     /// Rays per second over the passes since the camera last moved.
