@@ -186,16 +186,7 @@ impl<'g> App<'g> {
         if self.gpu_samples == 0 {
             let settings = self.options.settings(w, h);
             let renderer = Renderer::new(&self.scene.scene, self.orbit.camera()?, settings)?;
-            // A new pose rewrites the scene's tables, a new camera only the
-            // camera's; what cannot be rewritten (another size) is made again.
-            let kept = match self.shaded.as_mut() {
-                Some(g) if self.posed => g.set_scene(&renderer).is_ok(),
-                Some(g) => g.set_camera(&renderer).is_ok(),
-                None => false,
-            };
-            if !kept {
-                self.shaded = Some(GpuRenderer::new(t.gpu(), &renderer)?);
-            }
+            GpuRenderer::reuse(&mut self.shaded, t.gpu(), &renderer, self.posed)?;
             self.posed = false;
             self.gpu_start = Instant::now();
         }

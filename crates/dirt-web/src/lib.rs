@@ -201,13 +201,7 @@ impl Page {
             let start = Instant::now();
             if self.gpu_samples == 0 {
                 let renderer = Renderer::new(&self.scene, self.orbit.camera()?, self.settings)?;
-                let kept = match self.shaded.as_mut() {
-                    Some(g) => g.set_camera(&renderer).is_ok(),
-                    None => false,
-                };
-                if !kept {
-                    self.shaded = Some(GpuRenderer::new(t.gpu(), &renderer)?);
-                }
+                GpuRenderer::reuse(&mut self.shaded, t.gpu(), &renderer, false)?;
             }
             let ads = t.ads().ok_or_else(|| {
                 WebError::Trace(dirt_core::CoreError::NotBuilt {

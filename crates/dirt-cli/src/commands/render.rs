@@ -123,10 +123,12 @@ impl RenderTracer<'_> {
 }
 
 /// Whether the image is shaded on the GPU, and the GPU renderer kept from
-/// frame to frame: an animation's next pose rewrites its tables
-/// (`GpuRenderer::set_scene`), nothing is compiled or made again.
+/// frame to frame (`GpuRenderer::reuse`): the next frame rewrites its
+/// camera, and its scene's tables when the scene moves; nothing is compiled
+/// or made again.
 struct Shading<'g> {
     on_gpu: bool,
+    moving: bool,
     kept: Option<dirt_render::gpu::GpuRenderer<'g>>,
 }
 
@@ -143,33 +145,28 @@ fn render_image<'g>(
         let gpu = t.gpu();
         let traversal = t.traversal;
         let ads = t.ads().context("DIRT on the GPU is not built")?;
-        let made = || {
-            dirt_render::gpu::GpuRenderer::new(gpu, renderer)
-                .context("cannot set up the GPU renderer")
-        };
-        let (mut g, kept) = match shading.kept.take() {
-            Some(mut g) => match g.set_scene(renderer) {
-                Ok(()) => (g, true),
-                Err(_) => (made()?, false),
-            },
-            None => (made()?, false),
-        };
+        let kept =
+            dirt_render::gpu::GpuRenderer::reuse(&mut shading.kept, gpu, renderer, shading.moving)
+                .context("cannot set up the GPU renderer")?;
+        let g = shading
+            .kept
+            .as_mut()
+            .context("the GPU renderer was not made")?;
         let before = g.transfers();
         let rendered = g.render(ads, traversal, progress)?;
         let x = g.transfers().since(before);
         eprintln!(
             "shaded on the GPU{}: {} submissions, {} read-back ({} bytes), {} bytes written after the upload",
-            if kept {
-                " (the renderer kept, its scene tables rewritten)"
-            } else {
-                ""
+            match (kept, shading.moving) {
+                (true, true) => " (the renderer kept, its scene tables rewritten)",
+                (true, false) => " (the renderer kept, its camera rewritten)",
+                (false, _) => "",
             },
             x.submissions,
             x.read_backs,
             x.bytes_read,
             x.bytes_written
         );
-        shading.kept = Some(g);
         return Ok(rendered);
     }
     Ok(renderer.render(tracer.as_tracer(), progress)?)
@@ -368,6 +365,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     };
     let mut shading = Shading {
         on_gpu: matches!(tracer, RenderTracer::Gpu(_)) && !args.host_shading,
+        moving: scene.is_animated(),
         kept: None,
     };
     let first_build = kept.unwrap_or_else(|| build.elapsed());

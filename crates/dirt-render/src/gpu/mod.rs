@@ -981,6 +981,27 @@ impl<'g> GpuRenderer<'g> {
         self.set_camera(r)
     }
 
+    /// `slot`'s renderer pointed at `r` — at its camera, and at its scene's
+    /// tables too when `posed` (an animation's next pose) — or, where there
+    /// is none or that cannot be done (another image size, triangle or light
+    /// count), a new one made for `r` on `gpu`. Whether the old one was kept.
+    pub fn reuse(
+        slot: &mut Option<GpuRenderer<'g>>,
+        gpu: &'g Gpu,
+        r: &Renderer<'_>,
+        posed: bool,
+    ) -> Result<bool, RenderError> {
+        let kept = match slot.as_mut() {
+            Some(g) if posed => g.set_scene(r).is_ok(),
+            Some(g) => g.set_camera(r).is_ok(),
+            None => false,
+        };
+        if !kept {
+            *slot = Some(GpuRenderer::new(gpu, r)?);
+        }
+        Ok(kept)
+    }
+
     /// The counters of the samples added since the last restart (one
     /// read-back): rays traced and hits that were not hits, which make
     /// the image wrong ([`RenderError::Gpu`]).
