@@ -890,15 +890,9 @@ mod on_gpu {
             let (mean, _) = pollster::block_on(g.mean_async(s.spp)).expect("mean");
             assert_eq!(mean.bits(), want.image.bits(), "the mean read back");
             let c = g.counters().expect("counters");
-            assert_eq!(
-                u64::from(c.rays_lo) | (u64::from(c.rays_hi) << 32),
-                want.rays
-            );
+            assert_eq!(c.rays_total(), want.rays);
             // The candidates are the new camera's: as many confirmed.
-            assert_eq!(
-                u64::from(c.confirmed_lo) | (u64::from(c.confirmed_hi) << 32),
-                want.visibility.confirmed
-            );
+            assert_eq!(c.confirmed_total(), want.visibility.confirmed);
         }
         let other = settings(8, 8, 1, 1, Mode::Pt);
         let e = g

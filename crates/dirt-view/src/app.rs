@@ -205,7 +205,7 @@ impl<'g> App<'g> {
         {
             // Done: the one read-back says how many rays, and that every hit was one.
             let c = g.counters()?;
-            self.rays = u64::from(c.rays_lo) | (u64::from(c.rays_hi) << 32);
+            self.rays = c.rays_total();
             let secs = self.gpu_start.elapsed().as_secs_f64();
             self.mrays_per_s = self.rays as f64 / secs.max(1e-9) / 1e6;
         }

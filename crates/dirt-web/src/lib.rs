@@ -215,7 +215,7 @@ impl Page {
             self.gpu_samples += 1;
             // One read-back a step: the mean to draw, and the rays behind it.
             let (mean, counters) = g.mean_async(self.gpu_samples).await?;
-            let rays = u64::from(counters.rays_lo) | (u64::from(counters.rays_hi) << 32);
+            let rays = counters.rays_total();
             let took = start.elapsed();
             self.last_rate = rays.saturating_sub(self.rays) as f64 / took.as_secs_f64().max(1e-9);
             self.rays = rays;

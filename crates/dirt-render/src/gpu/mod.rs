@@ -1117,10 +1117,10 @@ impl<'g> GpuRenderer<'g> {
         let bytes = self.read(&staging, staging.size())?;
         let (image, state) = self.mean_of(&bytes, self.spp)?;
         let n = u64::from(self.n);
-        let confirmed = u64::from(state.confirmed_lo) | (u64::from(state.confirmed_hi) << 32);
+        let confirmed = state.confirmed_total();
         Ok(Rendered {
             image,
-            rays: u64::from(state.rays_lo) | (u64::from(state.rays_hi) << 32),
+            rays: state.rays_total(),
             visibility: VisibilityStats {
                 confirmed,
                 fallback: (n * u64::from(self.spp)).saturating_sub(confirmed),

@@ -71,6 +71,18 @@ pub struct RenderState {
     pub live: u32,
 }
 
+impl RenderState {
+    /// The valid rays traced, all samples so far (`tally`'s 64-bit total).
+    pub fn rays_total(&self) -> u64 {
+        u64::from(self.rays_lo) | (u64::from(self.rays_hi) << 32)
+    }
+
+    /// The primary rays whose candidate was confirmed, all samples so far.
+    pub fn confirmed_total(&self) -> u64 {
+        u64::from(self.confirmed_lo) | (u64::from(self.confirmed_hi) << 32)
+    }
+}
+
 /// A triangle with what `fetch` and the lights read (128 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
