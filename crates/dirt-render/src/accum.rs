@@ -66,11 +66,7 @@ impl Accumulator {
     /// The mean as 8-bit sRGB RGBA (opaque), exposure `2^stops`: the bytes
     /// `dirt render` writes to its PNG.
     pub fn rgba8(&self, stops: f32) -> Vec<u8> {
-        self.mean()
-            .to_srgb8(stops)
-            .chunks_exact(3)
-            .flat_map(|c| [c[0], c[1], c[2], 255])
-            .collect()
+        self.mean().to_rgba8(stops)
     }
 }
 

@@ -62,6 +62,15 @@ impl Image {
             .collect()
     }
 
+    /// [`Image::to_srgb8`] with an opaque alpha byte: what a canvas or a
+    /// texture takes.
+    pub fn to_rgba8(&self, stops: f32) -> Vec<u8> {
+        self.to_srgb8(stops)
+            .chunks_exact(3)
+            .flat_map(|c| [c[0], c[1], c[2], 255])
+            .collect()
+    }
+
     /// Writes a tone-mapped PNG.
     pub fn write_png(&self, path: &Path, stops: f32) -> Result<(), RenderError> {
         let buf = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(stops))

@@ -248,11 +248,7 @@ impl Page {
     /// The mean so far as 8-bit sRGBA, rows top to bottom (as `dirt render`'s PNG).
     pub fn rgba(&self) -> Vec<u8> {
         match &self.gpu_mean {
-            Some(m) => m
-                .to_srgb8(0.0)
-                .chunks_exact(3)
-                .flat_map(|c| [c[0], c[1], c[2], 255])
-                .collect(),
+            Some(m) => m.to_rgba8(0.0),
             None => self.accum.rgba8(0.0),
         }
     }
