@@ -229,6 +229,14 @@ fn zeroed(gpu: &Gpu, label: &str, bytes: u64, extra: wgpu::BufferUsages) -> wgpu
     })
 }
 
+/// A sample's error as `Gpu::scoped` carries it out of its scope.
+fn inside_scope(e: RenderError) -> GpuError {
+    match e {
+        RenderError::Gpu(g) => g,
+        other => GpuError::Device(other.to_string()),
+    }
+}
+
 /// Hits that were not hits make the image wrong: an error, never an image.
 fn check_counters(state: &RenderState) -> Result<(), RenderError> {
     if state.bad_hits > 0 {
@@ -895,10 +903,7 @@ impl<'g> GpuRenderer<'g> {
         let gpu = self.gpu;
         gpu.scoped("a GPU sample", || {
             self.sample(ads, traversal, sample, &mut None)
-                .map_err(|e| match e {
-                    RenderError::Gpu(g) => g,
-                    other => GpuError::Device(other.to_string()),
-                })
+                .map_err(inside_scope)
         })
         .map_err(RenderError::from)
     }
@@ -1099,10 +1104,7 @@ impl<'g> GpuRenderer<'g> {
         gpu.scoped("the GPU render", || {
             for sample in 0..self.spp {
                 self.sample(ads, traversal, sample, &mut inspect)
-                    .map_err(|e| match e {
-                        RenderError::Gpu(g) => g,
-                        other => GpuError::Device(other.to_string()),
-                    })?;
+                    .map_err(inside_scope)?;
                 progress(&crate::Progress {
                     samples_done: sample + 1,
                     spp: self.spp,
