@@ -53,8 +53,7 @@ fn settle(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     }
     let h = hits[i];
     // An unfinished walk stays what it is: `fetch` counts it and the render fails.
-    let bad = (h.prim == HIT_UNFINISHED) | (h.prim == HIT_STRUCTURE_FULL);
-    if !bad & hit_closer_than(c, h) {
+    if !hit_unfinished(h) & hit_closer_than(c, h) {
         hits[i] = c;
     }
     rays[i].tmax = f32_inf();

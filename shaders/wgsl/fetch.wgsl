@@ -53,7 +53,7 @@ fn fetch(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         return;
     }
     let hit = hits[i];
-    if (hit.prim == HIT_UNFINISHED) | (hit.prim == HIT_STRUCTURE_FULL) {
+    if hit_unfinished(hit) {
         atomicAdd(&state.bad_hits, 1u);
     }
     if hit.prim >= params.n_tris {

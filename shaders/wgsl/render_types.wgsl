@@ -195,3 +195,9 @@ fn ray_valid(r: Ray) -> bool {
 fn no_ray() -> Ray {
     return Ray(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0);
 }
+
+// A hit that is not one: a walk left unfinished, or a frame structure that
+// was full. Whoever reads it counts it (state.bad_hits) and the render fails.
+fn hit_unfinished(h: Hit) -> bool {
+    return (h.prim == HIT_UNFINISHED) | (h.prim == HIT_STRUCTURE_FULL);
+}

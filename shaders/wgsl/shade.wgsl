@@ -136,7 +136,7 @@ fn apply_shadows(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         return;
     }
     let h = hits[i];
-    if (h.prim == HIT_UNFINISHED) | (h.prim == HIT_STRUCTURE_FULL) {
+    if hit_unfinished(h) {
         atomicAdd(&state.bad_hits, 1u);
         return;
     }
@@ -263,7 +263,7 @@ fn apply_occlusion(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
         return;
     }
     let h = hits[i];
-    if (h.prim == HIT_UNFINISHED) | (h.prim == HIT_STRUCTURE_FULL) {
+    if hit_unfinished(h) {
         atomicAdd(&state.bad_hits, 1u);
         return;
     }
