@@ -180,6 +180,8 @@ pub struct Presenter {
     /// Tone-mapping the GPU renderer's sums in place.
     sums_pipeline: wgpu::RenderPipeline,
     tone: wgpu::Buffer,
+    /// The sums buffer last drawn and its bind group, kept while it is the same.
+    sums_bind: Option<(wgpu::Buffer, wgpu::BindGroup)>,
     device: wgpu::Device,
     queue: wgpu::Queue,
 }
@@ -299,6 +301,7 @@ impl Presenter {
             image: None,
             sums_pipeline,
             tone,
+            sums_bind: None,
             device: dev.device.clone(),
             queue: dev.queue.clone(),
         })
@@ -413,27 +416,33 @@ impl Presenter {
         };
         self.queue
             .write_buffer(&self.tone, 0, bytemuck::bytes_of(&tone));
-        let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("dirt view sums"),
-            layout: &self.sums_pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: sums.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: self.tone.as_entire_binding(),
-                },
-            ],
-        });
+        if self.sums_bind.as_ref().is_none_or(|(b, _)| b != sums) {
+            let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("dirt view sums"),
+                layout: &self.sums_pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: sums.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: self.tone.as_entire_binding(),
+                    },
+                ],
+            });
+            self.sums_bind = Some((sums.clone(), bind));
+        }
+        let Some((_, bind)) = &self.sums_bind else {
+            return Err(ViewError::Internal("no bind group for the sums".into()));
+        };
         present(
             &self.surface,
             &self.config,
             &self.device,
             &self.queue,
             &self.sums_pipeline,
-            &bind,
+            bind,
         )
     }
 }
