@@ -182,6 +182,11 @@ impl<'g> DirtGpu<'g> {
         self.ads.as_ref()
     }
 
+    /// The structure of the last build, or the error that there is none.
+    pub fn built_ads(&self) -> Result<&GpuAds, GpuError> {
+        built(&self.ads)
+    }
+
     /// Records the trace of `count` rays of `rays` into `enc` without
     /// submitting (see [`TraceResources::encode_trace`] for the buffers).
     #[allow(clippy::too_many_arguments)]
@@ -193,11 +198,7 @@ impl<'g> DirtGpu<'g> {
         stats: Option<&wgpu::Buffer>,
         count: u32,
     ) -> Result<(), GpuError> {
-        let ads = self.ads.as_ref().ok_or_else(|| {
-            GpuError::Params(CoreError::NotBuilt {
-                tracer: "dirt-gpu".into(),
-            })
-        })?;
+        let ads = built(&self.ads)?;
         self.resources
             .encode_trace(self.gpu, enc, ads, rays, hits, stats, count, self.traversal)
     }
@@ -216,11 +217,7 @@ impl<'g> DirtGpu<'g> {
         capacity: u32,
         counter: (&wgpu::Buffer, u64),
     ) -> Result<(), GpuError> {
-        let ads = self.ads.as_ref().ok_or_else(|| {
-            GpuError::Params(CoreError::NotBuilt {
-                tracer: "dirt-gpu".into(),
-            })
-        })?;
+        let ads = built(&self.ads)?;
         self.resources.encode_trace_counted(
             self.gpu,
             enc,
@@ -244,11 +241,7 @@ impl DirtGpu<'_> {
         rays: &[Ray],
         with_stats: bool,
     ) -> Result<crate::trace::Traced, GpuError> {
-        let ads = self.ads.as_ref().ok_or_else(|| {
-            GpuError::Params(CoreError::NotBuilt {
-                tracer: "dirt-gpu".into(),
-            })
-        })?;
+        let ads = built(&self.ads)?;
         if rays.is_empty() {
             return Ok(crate::trace::Traced::default());
         }
@@ -259,6 +252,16 @@ impl DirtGpu<'_> {
         self.rounds += t.rounds as u64;
         Ok(t)
     }
+}
+
+/// The structure `ads` holds, or the error that nothing was built (a field
+/// borrow, so that the tracer's resources can be borrowed beside it).
+fn built(ads: &Option<GpuAds>) -> Result<&GpuAds, GpuError> {
+    ads.as_ref().ok_or_else(|| {
+        GpuError::Params(CoreError::NotBuilt {
+            tracer: "dirt-gpu".into(),
+        })
+    })
 }
 
 impl Tracer for DirtGpu<'_> {

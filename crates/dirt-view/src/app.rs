@@ -190,9 +190,7 @@ impl<'g> App<'g> {
             self.posed = false;
             self.gpu_start = Instant::now();
         }
-        let ads = t
-            .ads()
-            .ok_or_else(|| ViewError::Internal("DIRT on the GPU is not built".into()))?;
+        let ads = t.built_ads()?;
         let Some(g) = self.shaded.as_mut() else {
             return Err(ViewError::Internal("no GPU renderer".into()));
         };

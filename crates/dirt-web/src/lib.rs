@@ -203,11 +203,7 @@ impl Page {
                 let renderer = Renderer::new(&self.scene, self.orbit.camera()?, self.settings)?;
                 GpuRenderer::reuse(&mut self.shaded, t.gpu(), &renderer, false)?;
             }
-            let ads = t.ads().ok_or_else(|| {
-                WebError::Trace(dirt_core::CoreError::NotBuilt {
-                    tracer: "dirt-gpu".into(),
-                })
-            })?;
+            let ads = t.built_ads()?;
             let Some(g) = self.shaded.as_mut() else {
                 return Err(WebError::NoWebGpu("the GPU renderer was not made".into()));
             };

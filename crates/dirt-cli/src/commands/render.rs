@@ -144,7 +144,7 @@ fn render_image<'g>(
     if let (RenderTracer::Gpu(t), true) = (&mut *tracer, shading.on_gpu) {
         let gpu = t.gpu();
         let traversal = t.traversal;
-        let ads = t.ads().context("DIRT on the GPU is not built")?;
+        let ads = t.built_ads()?;
         let kept =
             dirt_render::gpu::GpuRenderer::reuse(&mut shading.kept, gpu, renderer, shading.moving)
                 .context("cannot set up the GPU renderer")?;
