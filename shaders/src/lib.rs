@@ -62,15 +62,17 @@ pub const PREPARE_STAGES: [&str; 2] = ["gather", "views"];
 /// The stages of the GPU renderer (`dirt_render::gpu`), named after the CPU
 /// renderer's modules `dirt_render::<stage>`: `camera` (primary rays),
 /// `direct_visibility` (the rasterised candidates confirmed around the
-/// primary trace), `fetch`, `shade` (its steps one entry point each), `shift`
-/// and `accum`. The trace between them is [`STAGES`]' `trace`.
-pub const RENDER_STAGES: [&str; 6] = [
+/// primary trace), `fetch`, `shade` (its steps one entry point each), `shift`,
+/// `accum`, and `output` (the image drawn on a window's or canvas's texture,
+/// tone-mapped from the sums). The trace between them is [`STAGES`]' `trace`.
+pub const RENDER_STAGES: [&str; 7] = [
     "camera",
     "direct_visibility",
     "fetch",
     "shade",
     "shift",
     "accum",
+    "output",
 ];
 
 /// The naga capabilities the shaders are validated against.

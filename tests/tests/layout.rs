@@ -188,8 +188,18 @@ fn shared_structs_match_their_wgsl() {
 fn the_gpu_renderers_structs_match_their_wgsl() {
     use dirt_render::gpu::types::{
         LightGpu, MaterialGpu, PathGpu, RenderParams, RenderState, ShadowGpu, SurfaceGpu,
-        TextureGpu, TriGpu,
+        TextureGpu, Tone, TriGpu,
     };
+    check(
+        "output",
+        "Tone",
+        rust_layout!(Tone {
+            width,
+            height,
+            inv_samples,
+            scale
+        }),
+    );
     check(
         "shade",
         "RenderParams",

@@ -731,16 +731,23 @@ impl GpuAds {
 /// promised: no NoContraction path): for passes of the crates above this
 /// one, such as the GPU renderer's shading.
 pub fn wgsl_module(gpu: &Gpu, stage: &'static str) -> Result<wgpu::ShaderModule, GpuError> {
+    wgsl_module_on(&gpu.device, stage)
+}
+
+/// [`wgsl_module`] on any device, one dirt did not open as a [`Gpu`] too
+/// (a window's, which presents what the CPU rendered).
+pub fn wgsl_module_on(
+    device: &wgpu::Device,
+    stage: &'static str,
+) -> Result<wgpu::ShaderModule, GpuError> {
     let composed = dirt_shaders::compose(stage).map_err(|e| GpuError::Shader {
         stage,
         message: e.to_string(),
     })?;
-    Ok(gpu
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(stage),
-            source: wgpu::ShaderSource::Wgsl(composed.text.into()),
-        }))
+    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(stage),
+        source: wgpu::ShaderSource::Wgsl(composed.text.into()),
+    }))
 }
 
 /// Compute pipelines of `entries` of `shaders/wgsl/<stage>.wgsl`, sharing one

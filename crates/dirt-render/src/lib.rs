@@ -103,6 +103,9 @@ pub enum RenderError {
     Write { path: PathBuf, message: String },
     #[error("cannot read {path}: {message}")]
     Read { path: PathBuf, message: String },
+    /// A window's or canvas's surface refused to configure or present.
+    #[error("the surface: {0}")]
+    Surface(String),
 }
 
 /// What a render computes per pixel.

@@ -890,6 +890,8 @@ mod on_gpu {
             let (mean, _) = pollster::block_on(g.mean_async(s.spp)).expect("mean");
             assert_eq!(mean.bits(), want.image.bits(), "the mean read back");
             let c = g.counters().expect("counters");
+            // The page's form when its canvas presents the sums: the counters alone, awaited.
+            assert_eq!(pollster::block_on(g.counters_async()).expect("counters"), c);
             assert_eq!(c.rays_total(), want.rays);
             // The candidates are the new camera's: as many confirmed.
             assert_eq!(c.confirmed_total(), want.visibility.confirmed);
@@ -899,6 +901,174 @@ mod on_gpu {
             .set_camera(&Renderer::new(&scene, camera, other).expect("renderer"))
             .expect_err("another size");
         assert!(matches!(e, RenderError::Unsupported(_)), "{e}");
+    }
+
+    /// `target`'s bytes (`w` x `h` RGBA8), read back through a buffer.
+    fn texture_bytes(gpu: &Gpu, target: &dirt_gpu::wgpu::Texture) -> Vec<u8> {
+        use dirt_gpu::wgpu;
+        let (w, h) = (target.width(), target.height());
+        let row = (4 * w).div_ceil(256) * 256;
+        let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: u64::from(row * h),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_texture_to_buffer(
+            target.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buf,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(h),
+                },
+            },
+            target.size(),
+        );
+        gpu.queue.submit([enc.finish()]);
+        let padded = dirt_gpu::read_back(gpu, &buf, 0, buf.size()).expect("texture read back");
+        padded
+            .chunks_exact(row as usize)
+            .flat_map(|r| r[..4 * w as usize].to_vec())
+            .collect()
+    }
+
+    /// How many bytes of `got` differ from `want`, and the largest difference.
+    fn byte_diff(got: &[u8], want: &[u8]) -> (usize, u8) {
+        assert_eq!(got.len(), want.len());
+        let d = got.iter().zip(want).map(|(a, b)| a.abs_diff(*b));
+        (d.clone().filter(|&x| x > 0).count(), d.max().unwrap_or(0))
+    }
+
+    #[test]
+    fn the_output_pass_draws_the_pngs_bytes() {
+        use dirt_gpu::wgpu;
+        use dirt_render::gpu::output::Output;
+        let Some(gpu) = dirt_gpu::testing::any_gpu("the_output_pass_draws_the_pngs_bytes") else {
+            return;
+        };
+        let scene = lit_cornell();
+        let s = settings(20, 16, 3, 2, Mode::Pt);
+        let ads = GpuAds::build(gpu, &scene.triangles, &AdsParams::default()).expect("gpu build");
+        let camera = Camera::for_scene(&scene, 1.25).expect("camera");
+        let r = Renderer::new(&scene, camera, s).expect("renderer");
+        let mut g = GpuRenderer::new(gpu, &r).expect("GPU renderer");
+        for k in 0..s.spp {
+            g.add_sample(&ads, Traversal::HiZ, k).expect("sample");
+        }
+        let (mean, _) = pollster::block_on(g.mean_async(s.spp)).expect("mean");
+        let exposure = 0.5;
+        let png = mean.to_rgba8(exposure);
+        let distinct: std::collections::HashSet<_> = png.chunks_exact(4).collect();
+        assert!(distinct.len() > 20, "a blank image tests nothing");
+        // A plain target, an sRGB one (the pass decodes, the target encodes
+        // again), and one twice the size (each pixel drawn as 2x2 texels).
+        for (format, scale) in [
+            (wgpu::TextureFormat::Rgba8Unorm, 1),
+            (wgpu::TextureFormat::Rgba8UnormSrgb, 1),
+            (wgpu::TextureFormat::Bgra8Unorm, 2),
+        ] {
+            let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("output target"),
+                size: wgpu::Extent3d {
+                    width: s.width * scale,
+                    height: s.height * scale,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let view = target.create_view(&Default::default());
+            let mut out = Output::new(&gpu.device, &gpu.queue, format).expect("output pass");
+            let drawn = |out: &mut Output, sums: bool| {
+                let mut enc = gpu.device.create_command_encoder(&Default::default());
+                if sums {
+                    out.encode_sums(
+                        &mut enc,
+                        &view,
+                        g.sums(),
+                        s.width,
+                        s.height,
+                        s.spp,
+                        exposure,
+                    )
+                } else {
+                    out.encode_bytes(&mut enc, &view, &png, s.width, s.height)
+                }
+                .expect("encode");
+                gpu.queue.submit([enc.finish()]);
+                let mut bytes = texture_bytes(gpu, &target);
+                if format == wgpu::TextureFormat::Bgra8Unorm {
+                    bytes.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
+                }
+                // Every `scale`-th texel of every `scale`-th row: the image's pixels.
+                let w = (s.width * scale) as usize;
+                let picked: Vec<u8> = (0..s.height as usize)
+                    .flat_map(|y| (0..s.width as usize).map(move |x| (y, x)))
+                    .flat_map(|(y, x)| {
+                        let i = 4 * (y * scale as usize * w + x * scale as usize);
+                        bytes[i..i + 4].to_vec()
+                    })
+                    .collect();
+                (bytes, picked)
+            };
+            // The uploaded bytes come out as they went in.
+            let (_, copied) = drawn(&mut out, false);
+            let (n, max) = byte_diff(&copied, &png);
+            assert!(max <= 1, "{format:?}: uploaded bytes moved by {max}");
+            if !format.is_srgb() {
+                assert_eq!(n, 0, "{format:?}: uploaded bytes changed");
+            }
+            // The sums tone-mapped on the GPU: the PNG's bytes, to a step of
+            // rounding (the GPU's `pow` and division are not the CPU's bits).
+            let (all, toned) = drawn(&mut out, true);
+            let (n, max) = byte_diff(&toned, &png);
+            assert!(max <= 1, "{format:?}: tone-mapped bytes off by up to {max}");
+            assert!(
+                n * 50 <= png.len(),
+                "{format:?}: {n} of {} bytes off by one",
+                png.len()
+            );
+            if scale == 2 {
+                let w = (s.width * 2) as usize;
+                for y in 0..(s.height * 2) as usize {
+                    for x in 0..w {
+                        let (i, j) = (4 * (y * w + x), 4 * ((y & !1) * w + (x & !1)));
+                        assert_eq!(all[i..i + 4], all[j..j + 4], "texel ({x}, {y})");
+                    }
+                }
+            }
+        }
+        // Wrong sizes are errors, not a panic or a draw out of bounds.
+        let mut out = Output::new(&gpu.device, &gpu.queue, wgpu::TextureFormat::Rgba8Unorm)
+            .expect("output pass");
+        let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: 4,
+                height: 4,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let view = target.create_view(&Default::default());
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        assert!(
+            out.encode_sums(&mut enc, &view, g.sums(), 64, 64, 1, 0.0)
+                .is_err()
+        );
+        assert!(out.encode_bytes(&mut enc, &view, &png, 21, 16).is_err());
     }
 
     /// An animation's next pose on the same renderer (`set_scene`: the

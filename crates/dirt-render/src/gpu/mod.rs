@@ -12,8 +12,8 @@
 //! `ambient_occlusion`, the occlusion trace and `apply_occlusion`; `accum`
 //! adds the sample to the image. The host writes 8 bytes before each sample
 //! (its number) and reads the image back once, at the end — or never: a
-//! window presents [`GpuRenderer::sums`] where they lie
-//! ([`GpuRenderer::add_sample`]). The candidates are the CPU rasteriser's
+//! window or canvas presents [`GpuRenderer::sums`] where they lie
+//! ([`GpuRenderer::add_sample`], then [`output`]'s pass). The candidates are the CPU rasteriser's
 //! ([`Renderer::raster`], made once per camera), uploaded with the scene; a
 //! camera that rasterises nothing (orthographic) leaves the stage out.
 //!
@@ -33,6 +33,7 @@
 //! (`TraceResources::encode_trace_counted`, indirect), and its continuation
 //! rounds are indirect too: nothing is dispatched for a path that has ended.
 
+pub mod output;
 pub mod types;
 
 use crate::direct_visibility::VisibilityStats;
@@ -237,15 +238,23 @@ fn inside_scope(e: RenderError) -> GpuError {
     }
 }
 
-/// Hits that were not hits make the image wrong: an error, never an image.
-fn check_counters(state: &RenderState) -> Result<(), RenderError> {
+/// The counters in `bytes` (read back from the state buffer). Hits that were
+/// not hits make the image wrong: an error, never an image.
+fn counters_of(bytes: &[u8]) -> Result<RenderState, RenderError> {
+    let Some(bytes) = bytes.get(..STATE_BYTES as usize) else {
+        return Err(RenderError::Gpu(GpuError::Readback(format!(
+            "{} bytes read back for {STATE_BYTES} of counters",
+            bytes.len()
+        ))));
+    };
+    let state: RenderState = bytemuck::pod_read_unaligned(bytes);
     if state.bad_hits > 0 {
         return Err(RenderError::Gpu(GpuError::Device(format!(
             "{} hits of the render were not finished walks ({TRACE_ROUNDS} continuation rounds per trace were not enough, or a frame structure was full): the image would be wrong",
             state.bad_hits
         ))));
     }
-    Ok(())
+    Ok(state)
 }
 
 /// The scene as the passes read it.
@@ -1012,10 +1021,16 @@ impl<'g> GpuRenderer<'g> {
     /// the image wrong ([`RenderError::Gpu`]).
     pub fn counters(&mut self) -> Result<RenderState, RenderError> {
         let state = self.state.clone();
-        let bytes = self.read(&state, STATE_BYTES)?;
-        let state: RenderState = bytemuck::pod_read_unaligned(&bytes[..STATE_BYTES as usize]);
-        check_counters(&state)?;
-        Ok(state)
+        counters_of(&self.read(&state, STATE_BYTES)?)
+    }
+
+    /// [`GpuRenderer::counters`] without blocking: the form a browser page
+    /// awaits after each sample it presents on its canvas (the counters
+    /// only, not the image).
+    pub async fn counters_async(&mut self) -> Result<RenderState, RenderError> {
+        self.transfers.read_backs += 1;
+        self.transfers.bytes_read += STATE_BYTES;
+        counters_of(&dirt_gpu::read_back_async(self.gpu, &self.state, 0, STATE_BYTES).await?)
     }
 
     /// Copies the sums and the counters into one staging buffer (recorded
@@ -1047,8 +1062,7 @@ impl<'g> GpuRenderer<'g> {
             ))));
         }
         let (sums, state) = bytes.split_at(n);
-        let state: RenderState = bytemuck::pod_read_unaligned(&state[..STATE_BYTES as usize]);
-        check_counters(&state)?;
+        let state = counters_of(state)?;
         let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(sums);
         let inv = if samples == 0 {
             0.0
@@ -1068,7 +1082,7 @@ impl<'g> GpuRenderer<'g> {
 
     /// The mean of the `samples` samples added since the last restart and
     /// the counters, in one read-back that does not block: the form a
-    /// browser page awaits (it draws the mean on a 2D canvas).
+    /// browser page awaits where no canvas presents the sums.
     pub async fn mean_async(&mut self, samples: u32) -> Result<(Image, RenderState), RenderError> {
         let staging = self.encode_result();
         self.transfers.read_backs += 1;

@@ -193,3 +193,15 @@ pub struct ShadowGpu {
     /// `NO_PRIM - 1` when the path sent no shadow ray.
     pub aim: u32,
 }
+
+/// How the `output` pass tone-maps the sums (`output.wgsl`'s `Tone`, a uniform).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Tone {
+    pub width: u32,
+    pub height: u32,
+    /// 1 / samples (0 before the first).
+    pub inv_samples: f32,
+    /// 2^exposure.
+    pub scale: f32,
+}
