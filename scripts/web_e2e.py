@@ -85,6 +85,28 @@ def png_rgb(data):
     return w, h, b"".join(rows)
 
 
+# SwiftShader's WebGPU presenting on a canvas: with Chromium's default GL
+# compositor the GPU process drops the device at the first present ("Device
+# was destroyed"); with its Vulkan compositor the canvas is shown (the
+# screenshot has it) while `toDataURL` of a WebGPU canvas stays blank, so the
+# image of a page that presents is read from the screenshot.
+CANVAS_FLAGS = ["--enable-features=Vulkan", "--use-vulkan=swiftshader", "--use-angle=swiftshader"]
+
+
+def downsample(w, h, px, iw, ih):
+    """The image pixels of a screenshot showing an iw x ih image scaled by an
+    integer factor with nearest texels (image-rendering: pixelated): each
+    block's centre."""
+    if w % iw or h % ih or w // iw != h // ih:
+        sys.exit(f"FAIL: the screenshot is {w}x{h}, not a whole multiple of the {iw}x{ih} image")
+    k = w // iw
+    return b"".join(
+        px[3 * ((y * k + k // 2) * w + x * k + k // 2) : 3 * ((y * k + k // 2) * w + x * k + k // 2) + 3]
+        for y in range(ih)
+        for x in range(iw)
+    )
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("dirt")
@@ -143,7 +165,7 @@ def main():
                         "--no-first-run",
                         f"--user-data-dir={profile}",
                         "--window-size=800,900",
-                    ],
+                    ] + CANVAS_FLAGS,
                 }
             }
         }
@@ -180,16 +202,40 @@ def main():
             sys.exit(f"FAIL: asked for the GPU, the page says: {state['status']}")
         if a.backend == "gpu" and "shaded on the GPU" not in state["status"]:
             sys.exit(f"FAIL: the page does not shade on the GPU: {state['status']}")
+        if a.backend == "gpu" and "no image read back" not in state["status"]:
+            sys.exit(f"FAIL: the page does not present on its canvas: {state['status']}")
         print(f"page: {state['samples']} samples in {took:.1f} s (page load, device, build and passes)")
         canvas = wd(base, "POST", s + "/element", {"using": "css selector", "value": "#view"})
         eid = next(iter(canvas.values()))
         shot = base64.b64decode(wd(base, "GET", f"{s}/element/{eid}/screenshot"))
         with open(os.path.join(a.out, "screenshot.png"), "wb") as f:
             f.write(shot)
-        url = js("return document.getElementById('view').toDataURL('image/png');")
-        page_png = base64.b64decode(url.split(",", 1)[1])
-        with open(os.path.join(a.out, "page.png"), "wb") as f:
-            f.write(page_png)
+        presents = "no image read back" in state["status"]
+        page_png = None
+        if not presents:
+            # A 2D canvas: its bytes, exactly.
+            url = js("return document.getElementById('view').toDataURL('image/png');")
+            page_png = base64.b64decode(url.split(",", 1)[1])
+            with open(os.path.join(a.out, "page.png"), "wb") as f:
+                f.write(page_png)
+        if presents:
+            # The backend switched on the page: the CPU's 2D canvas replaces
+            # the WebGPU one (a canvas keeps its first kind of context).
+            js("const b = document.getElementById('backend'); b.value = 'cpu';"
+               " b.dispatchEvent(new Event('change'));")
+            switched = {}
+            for _ in range(120):
+                switched = js(
+                    "const s = document.getElementById('status');"
+                    "return {status: s.textContent, error: s.dataset.state === 'error',"
+                    " samples: Number(document.getElementById('stats').dataset.samples || 0)};"
+                )
+                if switched["error"] or ("on the CPU" in switched["status"] and switched["samples"] >= 1):
+                    break
+                time.sleep(0.5)
+            if switched["error"] or "on the CPU" not in switched["status"] or switched["samples"] < 1:
+                sys.exit(f"FAIL: switching the page to the CPU: {switched}")
+            print(f"page: switched to the CPU: {switched['status']}")
         if a.check:
             report = wd(base, "POST", s + "/execute/async", {
                 "script": "const done = arguments[arguments.length - 1];"
@@ -213,9 +259,16 @@ def main():
            "--width", str(w), "--height", str(h), "--out", ref] + shlex.split(state["camera"])
     print("reference:", " ".join(shlex.quote(c) for c in cmd))
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    pw, ph, page_px = png_rgb(page_png)
     rw, rh, ref_px = png_rgb(open(ref, "rb").read())
-    _, _, shot_px = png_rgb(shot)
+    sw, sh, shot_px = png_rgb(shot)
+    if page_png is None:
+        # Presented on a WebGPU canvas: the image as the screenshot shows it.
+        pw, ph, page_px = w, h, downsample(sw, sh, shot_px, w, h)
+        with open(os.path.join(a.out, "page.ppm"), "wb") as f:
+            f.write(b"P6 %d %d 255\n" % (w, h) + page_px)
+        print(f"page: read from the {sw}x{sh} screenshot (a WebGPU canvas is not read back)")
+    else:
+        pw, ph, page_px = png_rgb(page_png)
     if (pw, ph) != (rw, rh):
         sys.exit(f"FAIL: the page's image is {pw}x{ph}, the reference {rw}x{rh}")
     n = len(ref_px)

@@ -5,7 +5,7 @@
 import init, { open_page, builtin_scenes, check_builtin } from "./pkg/dirt_web.js";
 
 const params = new URLSearchParams(location.search);
-const canvas = document.getElementById("view");
+let canvas = document.getElementById("view");
 const status = document.getElementById("status");
 const stats = document.getElementById("stats");
 const warning = document.getElementById("warning");
@@ -13,8 +13,28 @@ const sceneSelect = document.getElementById("scene");
 const backendSelect = document.getElementById("backend");
 const maxSamples = Number(params.get("spp") || Infinity);
 const [w, h] = (params.get("size") || "160x120").split("x").map(Number);
-canvas.width = w;
-canvas.height = h;
+
+// A canvas keeps the kind of context it was first given (WebGPU for the GPU
+// backend, which presents there; 2D for the CPU's): each page gets a fresh one.
+function freshCanvas() {
+  const c = canvas.cloneNode(false);
+  c.width = w;
+  c.height = h;
+  canvas.replaceWith(c);
+  canvas = c;
+  let drag = null;
+  c.onpointerdown = (e) => { drag = [e.clientX, e.clientY]; c.setPointerCapture(e.pointerId); };
+  c.onpointerup = () => { drag = null; };
+  c.onpointermove = (e) => {
+    if (!drag) return;
+    // Drag in image pixels, whatever the canvas is scaled to.
+    const k = c.width / c.clientWidth;
+    pending.dx += (e.clientX - drag[0]) * k;
+    pending.dy += (e.clientY - drag[1]) * k;
+    drag = [e.clientX, e.clientY];
+  };
+  c.onwheel = (e) => { e.preventDefault(); pending.zoom += e.deltaY < 0 ? 1 : -1; };
+}
 
 let page = null;
 let generation = 0;
@@ -29,6 +49,7 @@ async function open(scene, file) {
   const mine = ++generation;
   page = null;
   show(`opening ${scene}…`);
+  freshCanvas();
   try {
     const p = await open_page(canvas, scene, file ?? undefined, backendSelect.value);
     if (mine !== generation) return;
@@ -105,19 +126,6 @@ async function main() {
   backendSelect.value = params.get("backend") || "auto";
   sceneSelect.onchange = () => open(sceneSelect.value);
   backendSelect.onchange = () => open(sceneSelect.value);
-
-  let drag = null;
-  canvas.onpointerdown = (e) => { drag = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); };
-  canvas.onpointerup = () => { drag = null; };
-  canvas.onpointermove = (e) => {
-    if (!drag) return;
-    // Drag in image pixels, whatever the canvas is scaled to.
-    const k = canvas.width / canvas.clientWidth;
-    pending.dx += (e.clientX - drag[0]) * k;
-    pending.dy += (e.clientY - drag[1]) * k;
-    drag = [e.clientX, e.clientY];
-  };
-  canvas.onwheel = (e) => { e.preventDefault(); pending.zoom += e.deltaY < 0 ? 1 : -1; };
 
   const drop = document.getElementById("drop");
   drop.ondragover = (e) => { e.preventDefault(); drop.classList.add("over"); };

@@ -3,14 +3,24 @@
 use crate::{Backend, Page, WebError};
 use dirt_core::{AdsParams, Traversal};
 use dirt_gpu::{Gpu, GpuOptions, wgpu};
+use dirt_render::gpu::output::SurfaceOutput;
 use std::cell::RefCell;
 use std::rc::Rc;
 use wasm_bindgen::prelude::*;
 use web_sys::{CanvasRenderingContext2d, HtmlCanvasElement, ImageData};
 
+/// The page's one device and what it came from (a canvas's surface is made
+/// by the instance and configured for the adapter).
+#[derive(Clone, Debug)]
+struct PageDevice {
+    gpu: &'static Gpu,
+    instance: wgpu::Instance,
+    adapter: wgpu::Adapter,
+}
+
 thread_local! {
     /// The page's one device, opened at the first use (and kept: the tracer borrows it).
-    static GPU: RefCell<Option<&'static Gpu>> = const { RefCell::new(None) };
+    static GPU: RefCell<Option<PageDevice>> = const { RefCell::new(None) };
 }
 
 fn js(e: WebError) -> JsError {
@@ -27,8 +37,12 @@ fn start() {
 
 /// The page's WebGPU device as dirt uses it (opened once).
 pub async fn page_gpu() -> Result<&'static Gpu, WebError> {
-    if let Some(g) = GPU.with(|g| *g.borrow()) {
-        return Ok(g);
+    Ok(page_device().await?.gpu)
+}
+
+async fn page_device() -> Result<PageDevice, WebError> {
+    if let Some(d) = GPU.with(|g| g.borrow().clone()) {
+        return Ok(d);
     }
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
         backends: wgpu::Backends::BROWSER_WEBGPU,
@@ -53,8 +67,13 @@ pub async fn page_gpu() -> Result<&'static Gpu, WebError> {
         }));
     }
     let gpu: &'static Gpu = Box::leak(Box::new(made?));
-    GPU.with(|g| *g.borrow_mut() = Some(gpu));
-    Ok(gpu)
+    let d = PageDevice {
+        gpu,
+        instance,
+        adapter,
+    };
+    GPU.with(|g| *g.borrow_mut() = Some(d.clone()));
+    Ok(d)
 }
 
 /// The names of the built-in scenes.
@@ -71,7 +90,9 @@ pub fn builtin_scenes() -> Vec<String> {
 #[derive(Debug)]
 pub struct WebPage {
     page: Rc<RefCell<Page>>,
-    ctx: CanvasRenderingContext2d,
+    /// The canvas's 2D context, where the CPU backend's mean is drawn (the
+    /// GPU backend's canvas is a WebGPU context the page presents on).
+    ctx: Option<CanvasRenderingContext2d>,
     /// Why the page runs on the CPU, when it does.
     fallback: Option<String>,
 }
@@ -79,7 +100,9 @@ pub struct WebPage {
 /// Opens `scene` — a built-in name, or the bytes of a dropped `.glb` /
 /// data-URI `.gltf` (`file`, named `scene`) — on `canvas` at its size.
 /// `backend` is `"auto"` (WebGPU, the CPU where the browser has none),
-/// `"gpu"` (WebGPU or an error) or `"cpu"`.
+/// `"gpu"` (WebGPU or an error) or `"cpu"`. The canvas takes a WebGPU
+/// context with the GPU backend and a 2D one with the CPU's: a canvas keeps
+/// the kind it was first given, so pass a fresh one when the backend changes.
 #[wasm_bindgen]
 pub async fn open_page(
     canvas: HtmlCanvasElement,
@@ -94,15 +117,15 @@ pub async fn open_page(
     .map_err(|e| js(e.into()))?;
     let params = AdsParams::default();
     let traversal = Traversal::HiZ;
-    let (tracer, fallback) = match backend.as_str() {
-        "cpu" => (Backend::cpu(params, traversal), None),
-        "gpu" => (
-            Backend::gpu(page_gpu().await.map_err(js)?, params, traversal),
-            None,
-        ),
-        "auto" => match page_gpu().await {
-            Ok(g) => (Backend::gpu(g, params, traversal), None),
-            Err(e) => (Backend::cpu(params, traversal), Some(e.to_string())),
+    let (tracer, device, fallback) = match backend.as_str() {
+        "cpu" => (Backend::cpu(params, traversal), None, None),
+        "gpu" => {
+            let d = page_device().await.map_err(js)?;
+            (Backend::gpu(d.gpu, params, traversal), Some(d), None)
+        }
+        "auto" => match page_device().await {
+            Ok(d) => (Backend::gpu(d.gpu, params, traversal), Some(d), None),
+            Err(e) => (Backend::cpu(params, traversal), None, Some(e.to_string())),
         },
         other => {
             return Err(JsError::new(&format!(
@@ -110,15 +133,47 @@ pub async fn open_page(
             )));
         }
     };
-    let ctx = canvas
-        .get_context("2d")
-        .ok()
-        .flatten()
-        .and_then(|c| c.dyn_into::<CanvasRenderingContext2d>().ok())
-        .ok_or_else(|| JsError::new("the canvas has no 2d context"))?;
-    let page = Page::new(loaded, canvas.width(), canvas.height(), tracer)
-        .await
-        .map_err(js)?;
+    let (width, height) = (canvas.width(), canvas.height());
+    let mut page = Page::new(loaded, width, height, tracer).await.map_err(js)?;
+    let ctx = match device {
+        Some(d) => {
+            let surface = d
+                .instance
+                .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
+                .map_err(|e| {
+                    JsError::new(&format!(
+                        "the canvas gives no WebGPU context ({e}): open the page again with a fresh canvas"
+                    ))
+                })?;
+            // The browser reports a shader or pipeline it refuses here, not
+            // at the first draw.
+            let scope = d.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let out = SurfaceOutput::new(
+                surface,
+                &d.adapter,
+                &d.gpu.device,
+                &d.gpu.queue,
+                width,
+                height,
+            );
+            if let Some(e) = scope.pop().await {
+                return Err(JsError::new(&format!("the canvas's output pass: {e}")));
+            }
+            let out = out.map_err(|e| js(e.into()))?;
+            page.present_on(out).map_err(js)?;
+            None
+        }
+        None => Some(
+            canvas
+                .get_context("2d")
+                .ok()
+                .flatten()
+                .and_then(|c| c.dyn_into::<CanvasRenderingContext2d>().ok())
+                .ok_or_else(|| {
+                    JsError::new("the canvas has no 2d context (it was given another kind)")
+                })?,
+        ),
+    };
     Ok(WebPage {
         page: Rc::new(RefCell::new(page)),
         ctx,
@@ -143,11 +198,16 @@ impl WebPage {
             p.step()
                 .await
                 .map_err(|e| JsValue::from_str(&e.to_string()))?;
-            let (w, h) = p.size();
-            let rgba = p.rgba();
-            let image =
-                ImageData::new_with_u8_clamped_array_and_sh(wasm_bindgen::Clamped(&rgba), w, h)?;
-            ctx.put_image_data(&image, 0.0, 0.0)?;
+            // The GPU backend has drawn on its canvas already.
+            if let (Some(ctx), Some(rgba)) = (ctx, p.rgba()) {
+                let (w, h) = p.size();
+                let image = ImageData::new_with_u8_clamped_array_and_sh(
+                    wasm_bindgen::Clamped(&rgba),
+                    w,
+                    h,
+                )?;
+                ctx.put_image_data(&image, 0.0, 0.0)?;
+            }
             Ok(JsValue::from(p.samples()))
         })
     }
@@ -201,7 +261,7 @@ impl WebPage {
             let (w, h) = p.size();
             let on = match p.backend() {
                 Backend::Gpu(_) => GPU
-                    .with(|g| *g.borrow())
+                    .with(|g| g.borrow().as_ref().map(|d| d.gpu))
                     .map(|g| format!("WebGPU: {} ({})", g.describe(), g.exactness))
                     .unwrap_or_else(|| "WebGPU".into()),
                 Backend::Cpu(_) => match &self.fallback {
@@ -213,10 +273,11 @@ impl WebPage {
                 "{} triangles, {w}x{h}, {} on {on}{}",
                 p.triangles(),
                 dirt_render::AsyncTrace::name(p.backend()),
-                if p.shaded_on_gpu() {
-                    "; shaded on the GPU, one read-back a sample"
-                } else {
-                    ""
+                match (p.shaded_on_gpu(), p.presents()) {
+                    (true, true) =>
+                        "; shaded on the GPU and presented on the canvas, no image read back",
+                    (true, false) => "; shaded on the GPU, one read-back a sample",
+                    _ => "",
                 }
             )
         })

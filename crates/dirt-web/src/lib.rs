@@ -1,13 +1,17 @@
 //! dirt-web: DIRT in a browser page.
 //!
 //! [`Page`] path-traces a scene progressively: each step renders one sample
-//! pass and adds it to the running mean, which [`Page::rgba`] tone-maps as
-//! `dirt render`'s PNG is. On the page's WebGPU device the whole sample runs
-//! there (`dirt_render::gpu`: the frame build, the traces and the shading,
-//! one submission) and the mean comes back in one read-back per step,
-//! awaited (a browser resolves read-backs on its event loop); where the
-//! browser has no WebGPU, `dirt-render` traces through `dirt-cpu` compiled
-//! to wasm ([`Backend`]). [`check`] measures the
+//! pass and adds it to the running mean, tone-mapped as `dirt render`'s PNG
+//! is. On the page's WebGPU device the whole sample runs there
+//! (`dirt_render::gpu`: the frame build, the traces and the shading, one
+//! submission) and the page's canvas, a WebGPU context, shows the sums
+//! tone-mapped where they lie ([`Page::present_on`], the renderer's `output`
+//! pass): the image is never read back, only the counters (48 bytes a step,
+//! awaited: a browser resolves read-backs on its event loop, and the wait
+//! paces the steps). Without a canvas the mean comes back in one read-back
+//! a step ([`Page::rgba`]). Where the browser has no WebGPU, `dirt-render`
+//! traces through `dirt-cpu` compiled to wasm ([`Backend`]) and the mean is
+//! drawn on a 2D canvas. [`check`] measures the
 //! portable path: a GPU build and trace against the CPU reference and brute
 //! force over the same triangles and rays, bit for bit ([`compare`]).
 //!
@@ -24,6 +28,7 @@ use dirt_gpu::{DirtGpu, Gpu, GpuError};
 use dirt_math::{Hit, Ray, RayStats, Triangle};
 use dirt_render::accum::Accumulator;
 use dirt_render::gpu::GpuRenderer;
+use dirt_render::gpu::output::{Drawn, SurfaceOutput};
 use dirt_render::orbit::Orbit;
 use dirt_render::{AsyncTrace, RenderError, Renderer, Settings};
 use dirt_scene::{Scene, SceneError};
@@ -145,10 +150,13 @@ pub struct Page {
     backend: Backend,
     /// With the GPU backend: the renderer that shades there (made for the
     /// first step, pointed at each new camera), its samples since the
-    /// camera moved, and their mean as last read back.
+    /// camera moved, and their mean as last read back (none when a canvas
+    /// presents them).
     shaded: Option<GpuRenderer<'static>>,
     gpu_samples: u32,
     gpu_mean: Option<dirt_render::Image>,
+    /// The canvas's surface, where the GPU renderer's sums are drawn.
+    canvas: Option<SurfaceOutput>,
     /// Rays traced since the camera last moved, and the time their sample passes took.
     rays: u64,
     busy: Duration,
@@ -189,6 +197,7 @@ impl Page {
             shaded: None,
             gpu_samples: 0,
             gpu_mean: None,
+            canvas: None,
             rays: 0,
             busy: Duration::ZERO,
             last_rate: 0.0,
@@ -209,14 +218,26 @@ impl Page {
             };
             g.add_sample(ads, t.traversal, self.gpu_samples)?;
             self.gpu_samples += 1;
-            // One read-back a step: the mean to draw, and the rays behind it.
-            let (mean, counters) = g.mean_async(self.gpu_samples).await?;
-            let rays = counters.rays_total();
+            let rays = if let Some(out) = self.canvas.as_mut() {
+                // The sums drawn where they lie; only the counters come back.
+                out.draw(Drawn::Sums {
+                    sums: g.sums(),
+                    width: self.settings.width,
+                    height: self.settings.height,
+                    samples: self.gpu_samples,
+                    exposure: 0.0,
+                })?;
+                g.counters_async().await?.rays_total()
+            } else {
+                // One read-back a step: the mean to draw, and the rays behind it.
+                let (mean, counters) = g.mean_async(self.gpu_samples).await?;
+                self.gpu_mean = Some(mean);
+                counters.rays_total()
+            };
             let took = start.elapsed();
             self.last_rate = rays.saturating_sub(self.rays) as f64 / took.as_secs_f64().max(1e-9);
             self.rays = rays;
             self.busy += took;
-            self.gpu_mean = Some(mean);
             return Ok(());
         }
         let start = Instant::now();
@@ -241,17 +262,39 @@ impl Page {
         self.busy = Duration::ZERO;
     }
 
-    /// The mean so far as 8-bit sRGBA, rows top to bottom (as `dirt render`'s PNG).
-    pub fn rgba(&self) -> Vec<u8> {
-        match &self.gpu_mean {
-            Some(m) => m.to_rgba8(0.0),
-            None => self.accum.rgba8(0.0),
+    /// The mean so far as 8-bit sRGBA, rows top to bottom (as `dirt render`'s
+    /// PNG); none where the GPU renderer's image is presented on the canvas
+    /// and never read back.
+    pub fn rgba(&self) -> Option<Vec<u8>> {
+        match (&self.backend, &self.gpu_mean) {
+            (Backend::Cpu(_), _) => Some(self.accum.rgba8(0.0)),
+            (Backend::Gpu(_), Some(m)) => Some(m.to_rgba8(0.0)),
+            (Backend::Gpu(_), None) => None,
         }
     }
 
     /// Whether the samples are shaded on the GPU (the GPU backend).
     pub fn shaded_on_gpu(&self) -> bool {
         matches!(self.backend, Backend::Gpu(_))
+    }
+
+    /// From the next step on, the GPU renderer's sums are drawn on `out` (a
+    /// canvas's WebGPU surface on the page's device) and not read back.
+    /// Refused on the CPU backend, whose image is made on the host.
+    pub fn present_on(&mut self, out: SurfaceOutput) -> Result<(), WebError> {
+        if !self.shaded_on_gpu() {
+            return Err(WebError::Render(RenderError::Unsupported(
+                "presenting on a WebGPU canvas needs the GPU backend".into(),
+            )));
+        }
+        self.gpu_mean = None;
+        self.canvas = Some(out);
+        Ok(())
+    }
+
+    /// Whether a canvas presents the image (no read-back of it).
+    pub fn presents(&self) -> bool {
+        self.canvas.is_some()
     }
 
     /// Sample passes in the mean.
