@@ -145,6 +145,24 @@ pub fn read_rays_from(reader: impl Read, path: &Path) -> Result<Vec<Ray>, NpyErr
     Ok(rays)
 }
 
+/// Reads a hits file (`dirt eval` compares the hits of whole `dirt trace` runs).
+pub fn read_hits(path: &Path) -> Result<Vec<Hit>, NpyError> {
+    let file = File::open(path).map_err(|source| NpyError::Open {
+        path: path.to_owned(),
+        source,
+    })?;
+    let data: Vec<u32> = read_matrix(BufReader::new(file), path, HIT_COLUMNS, TypeChar::Uint)?;
+    Ok(data
+        .chunks_exact(HIT_COLUMNS as usize)
+        .map(|w| Hit {
+            prim: w[0],
+            t: f32::from_bits(w[1]),
+            u: f32::from_bits(w[2]),
+            v: f32::from_bits(w[3]),
+        })
+        .collect())
+}
+
 /// Reads a triangles file (used by the tests to read back `dirt triangles`).
 #[cfg(test)]
 pub fn read_triangles_from(reader: impl Read, path: &Path) -> Result<Vec<Triangle>, NpyError> {
@@ -158,12 +176,24 @@ pub fn read_triangles_from(reader: impl Read, path: &Path) -> Result<Vec<Triangl
 }
 
 /// Reads a C-order float32 array of shape `(N, columns)` as a flat vector.
-fn read_f32_matrix(mut reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f32>, NpyError> {
+fn read_f32_matrix(reader: impl Read, path: &Path, columns: u64) -> Result<Vec<f32>, NpyError> {
+    read_matrix(reader, path, columns, TypeChar::Float)
+}
+
+/// Reads a C-order array of 4-byte `kind` values (`f32`, `u32`) of shape
+/// `(N, columns)` as a flat vector.
+fn read_matrix<T: npyz::Deserialize>(
+    mut reader: impl Read,
+    path: &Path,
+    columns: u64,
+    kind: TypeChar,
+) -> Result<Vec<T>, NpyError> {
     let header = read_header(&mut reader, path)?;
     let npy = NpyFile::with_header(header, reader);
     let dtype = npy.dtype();
-    let is_f32 = matches!(&dtype, DType::Plain(ts) if ts.type_char() == TypeChar::Float && ts.size_field() == 4);
-    if !is_f32 {
+    let is_kind =
+        matches!(&dtype, DType::Plain(ts) if ts.type_char() == kind && ts.size_field() == 4);
+    if !is_kind {
         return Err(NpyError::DType {
             path: path.to_owned(),
             found: dtype_text(&dtype),
@@ -190,7 +220,7 @@ fn read_f32_matrix(mut reader: impl Read, path: &Path, columns: u64) -> Result<V
         .checked_mul(columns)
         .and_then(|n| usize::try_from(n).ok())
         .ok_or_else(|| data_err(format!("{} rows is too many", shape[0])))?;
-    let reader = npy.data::<f32>().map_err(|e| data_err(e.to_string()))?;
+    let reader = npy.data::<T>().map_err(|e| data_err(e.to_string()))?;
     // Do not trust the header's row count for the allocation: grow as data arrives.
     let mut out = Vec::with_capacity(expected.min(1 << 24));
     for value in reader {

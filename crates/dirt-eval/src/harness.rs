@@ -330,6 +330,9 @@ pub struct EvalResults {
     pub renders: Vec<RenderRow>,
     pub render_reference: Option<RenderReference>,
     pub render_settings_bounces: u32,
+    /// Whole `dirt trace` processes on a large scene, per backend (filled by
+    /// the command line, which runs its own binary).
+    pub processes: Vec<ProcessRow>,
     /// What was skipped, and why.
     pub notes: Vec<String>,
     /// Wall time of the whole run, seconds.
@@ -337,6 +340,23 @@ pub struct EvalResults {
     /// The converged reference render (written as a PNG beside the plots).
     #[serde(skip)]
     pub render_image: Option<dirt_render::output::Image>,
+}
+
+/// Whole `dirt trace` processes of one backend on one scene and ray file:
+/// loading the scene, building, tracing and writing the hits, as a user
+/// runs it.
+#[derive(Clone, Debug, Serialize)]
+pub struct ProcessRow {
+    pub scene: String,
+    pub triangles: usize,
+    pub rays: usize,
+    /// `dirt trace --backend` value (`cpu` is DIRT at the cost model's choice).
+    pub backend: String,
+    /// Wall seconds of each run, in run order.
+    pub runs_s: Vec<f64>,
+    /// Hits that differ from DIRT's (another primitive, or `t` more than
+    /// 1e-4 relative away; DIRT's own row compares nothing), of `rays`.
+    pub differ: usize,
 }
 
 /// The cost model's choice (`dirt_cpu::cost::auto`) for one scene: what the

@@ -376,6 +376,8 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         let _ = writeln!(s);
     }
 
+    process_table(&mut s, res);
+
     // Errors.
     let _ = writeln!(s, "## Error against brute force\n");
     let dirt_bad: Vec<&TraceRow> = res
@@ -723,6 +725,52 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
 
 /// The fixed setting ([`DEFAULT`]) against the peers and against the cost
 /// model's choice of the headline, so the fixed grid stays reported.
+/// Whole `dirt trace` processes on the large scene, per backend: the
+/// median wall time of its runs and the ratio DIRT / backend.
+fn process_table(s: &mut String, res: &EvalResults) {
+    let Some(first) = res.processes.first() else {
+        return;
+    };
+    let median = |runs: &[f64]| {
+        let mut v = runs.to_vec();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        (n > 0).then(|| (v[(n - 1) / 2] + v[n / 2]) / 2.0)
+    };
+    let _ = writeln!(
+        s,
+        "Whole processes on a large scene (`{}`, {} triangles; {} random rays from `dirt rays --kind random`): `dirt trace SCENE --rays RAYS.npy --out HITS.npy --backend B`, timed from start to exit (loading the scene, building, tracing, writing the hits), runs alternated; `cpu` is DIRT at the cost model's choice. `differ` counts hits with another primitive or a `t` more than 1e-4 (relative) from DIRT's.\n",
+        first.scene, first.triangles, first.rays
+    );
+    let _ = writeln!(
+        s,
+        "| backend | runs s | median s | dirt/backend | differ / rays |\n|---|---|---:|---:|---:|"
+    );
+    let dirt = res
+        .processes
+        .iter()
+        .find(|r| r.backend == "cpu")
+        .and_then(|r| median(&r.runs_s));
+    for r in &res.processes {
+        let runs: Vec<String> = r.runs_s.iter().map(|&x| f(x)).collect();
+        let m = median(&r.runs_s);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} / {} |",
+            r.backend,
+            runs.join(", "),
+            opt(m),
+            match (dirt, m) {
+                (Some(d), Some(m)) if m > 0.0 => f(d / m),
+                _ => "–".into(),
+            },
+            r.differ,
+            r.rays
+        );
+    }
+    let _ = writeln!(s);
+}
+
 fn fixed_default_table(s: &mut String, res: &EvalResults, peers: &[String]) {
     let _ = writeln!(
         s,

@@ -46,6 +46,9 @@ pub struct EvalArgs {
     /// Skip the approximate methods (MMRT's A-buffer, one depth layer).
     #[arg(long)]
     no_approx: bool,
+    /// Skip the whole `dirt trace` processes on the large scene (not run with --quick).
+    #[arg(long)]
+    no_processes: bool,
     /// Frames of the deforming scene.
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
@@ -153,6 +156,12 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
         rayon::current_num_threads()
     );
     let mut res = dirt_eval::run(&cfg).context("evaluation failed")?;
+    if !args.quick && !args.no_processes {
+        match processes(&args.out) {
+            Ok(rows) => res.processes = rows,
+            Err(e) => notes.push(format!("whole processes skipped: {e:#}")),
+        }
+    }
     notes.append(&mut res.notes);
     res.notes = notes;
     let files = dirt_eval::report::write_all(&res, &args.out, args.report.as_deref())
@@ -187,4 +196,96 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Rings and segments of the large scene's tube: 2 · 320 · 320 = 204,800 triangles.
+const LARGE_TUBE: usize = 320;
+/// Random rays traced through it.
+const LARGE_RAYS: usize = 1_000_000;
+/// Runs per backend, alternated.
+const PROCESS_RUNS: usize = 2;
+
+/// Whole `dirt trace` processes of this binary on a generated tube of
+/// 204,800 triangles and a million random rays, per backend (DIRT at the
+/// cost model's choice, obvhs, Embree when built with it).
+fn processes(out: &std::path::Path) -> Result<Vec<dirt_eval::harness::ProcessRow>> {
+    use std::process::{Command, Stdio};
+    let exe = std::env::current_exe().context("cannot find this program")?;
+    let dir = out.join("process");
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot make {}", dir.display()))?;
+    let scene = dir.join("tube.glb");
+    std::fs::write(
+        &scene,
+        dirt_eval::dynamic::twister_glb(LARGE_TUBE, LARGE_TUBE),
+    )
+    .with_context(|| format!("cannot write {}", scene.display()))?;
+    let rays = dir.join("rays.npy");
+    let run = |args: &[&std::ffi::OsStr]| -> Result<f64> {
+        let start = std::time::Instant::now();
+        let status = Command::new(&exe)
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .context("cannot run dirt")?;
+        if !status.success() {
+            bail!("dirt {args:?} failed ({status})");
+        }
+        Ok(start.elapsed().as_secs_f64())
+    };
+    let count = LARGE_RAYS.to_string();
+    run(&[
+        "rays".as_ref(),
+        scene.as_os_str(),
+        "--count".as_ref(),
+        count.as_ref(),
+        "--kind".as_ref(),
+        "random".as_ref(),
+        "--out".as_ref(),
+        rays.as_os_str(),
+    ])?;
+    let mut backends = vec!["cpu", "obvhs"];
+    if cfg!(feature = "embree") {
+        backends.push("embree");
+    }
+    let hits_of = |b: &str| dir.join(format!("hits-{b}.npy"));
+    let mut runs = vec![Vec::new(); backends.len()];
+    for _ in 0..PROCESS_RUNS {
+        for (k, b) in backends.iter().enumerate() {
+            let hits = hits_of(b);
+            eprintln!("dirt eval: whole process, dirt trace --backend {b}");
+            runs[k].push(run(&[
+                "trace".as_ref(),
+                scene.as_os_str(),
+                "--rays".as_ref(),
+                rays.as_os_str(),
+                "--out".as_ref(),
+                hits.as_os_str(),
+                "--backend".as_ref(),
+                b.as_ref(),
+            ])?);
+        }
+    }
+    let dirt = dirt_cli::npy::read_hits(&hits_of("cpu"))?;
+    let mut rows = Vec::new();
+    for (b, runs_s) in backends.iter().zip(runs) {
+        let hits = dirt_cli::npy::read_hits(&hits_of(b))?;
+        if hits.len() != dirt.len() {
+            bail!("{} hits from {b}, {} from DIRT", hits.len(), dirt.len());
+        }
+        let differ = dirt
+            .iter()
+            .zip(&hits)
+            .filter(|(d, h)| d.prim != h.prim || (d.t - h.t).abs() > 1e-4 * d.t.abs().max(1e-30))
+            .count();
+        rows.push(dirt_eval::harness::ProcessRow {
+            scene: "tube".into(),
+            triangles: 2 * LARGE_TUBE * LARGE_TUBE,
+            rays: dirt.len(),
+            backend: b.to_string(),
+            runs_s,
+            differ,
+        });
+    }
+    Ok(rows)
 }
