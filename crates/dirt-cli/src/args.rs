@@ -161,11 +161,7 @@ impl AdsArgs {
                 uniq.push(c);
             }
         }
-        let sample: Vec<Ray> = match sample {
-            Some(rays) if !rays.is_empty() => dirt_cpu::cost::stride_sample(rays, AUTO_SAMPLE),
-            _ => rays::generate(&scene.triangles, None, RayKind::Mixed, AUTO_SAMPLE, 1)
-                .context("cost model: cannot make the ray sample")?,
-        };
+        let sample = sample_of(scene, sample, AUTO_SAMPLE)?;
         let mut choice = dirt_cpu::cost::auto_within(
             &scene.triangles,
             &sample,
@@ -197,6 +193,32 @@ impl AdsArgs {
         Ok((best, choice.best_ads.take()))
     }
 
+    /// The traversal of DIRT on the CPU: `given`, else, for a structure the
+    /// cost model chose (`ads`), the faster of the two on a sample of the
+    /// rays (`dirt_cpu::cost::faster_traversal`, said on stderr), else the
+    /// default.
+    pub fn traversal(
+        &self,
+        given: Option<Traversal>,
+        ads: Option<&dirt_cpu::Ads>,
+        scene: &Scene,
+        sample: Option<&[Ray]>,
+    ) -> Result<Traversal> {
+        let (Some(ads), None) = (ads, given) else {
+            return Ok(given.unwrap_or_default());
+        };
+        let sample = sample_of(scene, sample, TRAVERSAL_SAMPLE)?;
+        let c = dirt_cpu::cost::faster_traversal(ads, &scene.triangles, &sample);
+        eprintln!(
+            "traversal: {}, the faster on a sample of {} rays (linear {:.2} ms, hiz {:.2} ms; --traversal sets it)",
+            c.traversal,
+            c.rays,
+            c.linear.as_secs_f64() * 1e3,
+            c.hiz.as_secs_f64() * 1e3
+        );
+        Ok(c.traversal)
+    }
+
     /// The parameters as given, `AdsParams::default()` for the rest (what `--fixed` builds).
     pub fn params(&self) -> AdsParams {
         AdsParams {
@@ -211,6 +233,18 @@ impl AdsArgs {
 
 /// Rays in the sample the cost model measures its candidates with.
 const AUTO_SAMPLE: usize = 1000;
+
+/// Rays in the sample the traversals are timed on: enough for milliseconds.
+const TRAVERSAL_SAMPLE: usize = 4000;
+
+/// `n` of `rays` (evenly strided) or, without rays, `n` mixed rays of `scene`.
+fn sample_of(scene: &Scene, rays: Option<&[Ray]>, n: usize) -> Result<Vec<Ray>> {
+    Ok(match rays {
+        Some(rays) if !rays.is_empty() => dirt_cpu::cost::stride_sample(rays, n),
+        _ => rays::generate(&scene.triangles, None, RayKind::Mixed, n, 1)
+            .context("cannot make a sample of rays")?,
+    })
+}
 
 /// Parses a point `X,Y,Z` (`--center`, `--eye`, `--target`).
 pub fn parse_point(s: &str) -> Result<Vec3, String> {

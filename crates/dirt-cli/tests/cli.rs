@@ -908,11 +908,31 @@ fn auto_keeps_given_options_and_the_hits() {
         "{err}"
     );
     assert!(err.contains(", B 4,"), "the given B is kept: {err}");
-    // The default is the cost model's choice, for the rays of the file.
+    // The default is the cost model's choice, for the rays of the file, and
+    // the traversal measured faster on a sample of them.
     let (_, err) = dirt_ok(&["trace", "cornell", "--rays", s(&rays), "--out", s(&c)]);
     assert!(
         err.contains("ads: ") && err.contains("frame of 3000 rays"),
         "{err}"
+    );
+    assert!(
+        err.contains("traversal: ") && err.contains("the faster on a sample of 3000 rays"),
+        "{err}"
+    );
+    let d = dir.path("given.npy");
+    let (_, err) = dirt_ok(&[
+        "trace",
+        "cornell",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&d),
+        "--traversal",
+        "hiz",
+    ]);
+    assert!(
+        !err.contains("traversal: "),
+        "a given traversal is not timed: {err}"
     );
     // Nothing left to choose: views, resolution and B given.
     let (_, err) = dirt_ok(&[
@@ -930,7 +950,7 @@ fn auto_keeps_given_options_and_the_hits() {
         "4",
     ]);
     assert!(!err.contains("ads: "), "{err}");
-    for other in [&b, &c] {
+    for other in [&b, &c, &d] {
         assert_eq!(
             std::fs::read(&a).expect("read"),
             std::fs::read(other).expect("read"),

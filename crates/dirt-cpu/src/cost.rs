@@ -322,6 +322,47 @@ pub fn choose(
     Ok(out)
 }
 
+/// Which traversal traced a sample of rays faster through one structure,
+/// and how long each took (the shortest of [`TRAVERSAL_RUNS`] runs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraversalChoice {
+    pub traversal: Traversal,
+    pub linear: std::time::Duration,
+    pub hiz: std::time::Duration,
+    pub rays: usize,
+}
+
+/// Runs of each traversal [`faster_traversal`] times, alternated.
+pub const TRAVERSAL_RUNS: usize = 3;
+
+/// Times the trace of `sample` through `ads` (built over `tris`) with each
+/// traversal — [`TRAVERSAL_RUNS`] runs each, alternated, the shortest kept —
+/// and picks the faster (linear on a tie). Unlike the counts of the cost
+/// model this is a measurement: where the two are close the pick may differ
+/// from run to run. It changes only time: both traversals give the same
+/// hits, bit for bit.
+pub fn faster_traversal(ads: &Ads, tris: &[Triangle], sample: &[Ray]) -> TraversalChoice {
+    let mut best = [std::time::Duration::MAX; 2];
+    for _ in 0..TRAVERSAL_RUNS {
+        for (k, t) in Traversal::ALL.into_iter().enumerate() {
+            let start = web_time::Instant::now();
+            std::hint::black_box(crate::trace(ads, tris, sample, t));
+            best[k] = best[k].min(start.elapsed());
+        }
+    }
+    let [linear, hiz] = best;
+    TraversalChoice {
+        traversal: if hiz < linear {
+            Traversal::HiZ
+        } else {
+            Traversal::Linear
+        },
+        linear,
+        hiz,
+        rays: sample.len(),
+    }
+}
+
 /// Spearman's rank correlation of two equally long series (ties get their
 /// mean rank); `None` for fewer than two pairs or a constant series.
 pub fn rank_correlation(a: &[f64], b: &[f64]) -> Option<f64> {
@@ -706,6 +747,39 @@ mod tests {
         ] {
             assert!((a - b).abs() < 1e-6 * b.max(1.0), "{a} vs {b}");
         }
+    }
+
+    #[test]
+    fn the_faster_traversal_is_the_one_measured_faster() {
+        let tris: Vec<Triangle> = (0..64)
+            .map(|k| {
+                let z = k as f32 * 0.05;
+                Triangle::new(
+                    dirt_math::Vec3::new(-1.0, -1.0, z),
+                    dirt_math::Vec3::new(1.0, -1.0, z + 0.3),
+                    dirt_math::Vec3::new(0.0, 1.0, z),
+                )
+            })
+            .collect();
+        let sample = sample_rays(&tris, 300, 7);
+        let ads = Ads::build(&tris, &AdsParams::default()).expect("build");
+        let c = faster_traversal(&ads, &tris, &sample);
+        assert_eq!(c.rays, sample.len());
+        assert!(c.linear > std::time::Duration::ZERO && c.hiz > std::time::Duration::ZERO);
+        let want = if c.hiz < c.linear {
+            Traversal::HiZ
+        } else {
+            Traversal::Linear
+        };
+        assert_eq!(c.traversal, want);
+        // Whichever it picks traces the same hits.
+        let bits = |t| -> Vec<[u32; 4]> {
+            crate::trace(&ads, &tris, &sample, t)
+                .iter()
+                .map(|h| h.bits())
+                .collect()
+        };
+        assert_eq!(bits(Traversal::Linear), bits(Traversal::HiZ));
     }
 
     #[test]

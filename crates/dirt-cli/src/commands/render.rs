@@ -71,9 +71,10 @@ pub struct RenderArgs {
     /// round trip per trace) instead of on the GPU.
     #[arg(long)]
     host_shading: bool,
-    /// How DIRT walks the tiles a ray crosses.
-    #[arg(long, value_enum, default_value_t = Traversal::default())]
-    traversal: Traversal,
+    /// How DIRT walks the tiles a ray crosses [default: on the CPU at the
+    /// cost model's choice, the faster on a sample of rays; else linear]
+    #[arg(long, value_enum)]
+    traversal: Option<Traversal>,
     #[command(flatten)]
     ads: AdsArgs,
     #[command(flatten)]
@@ -339,7 +340,13 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         )?,
     };
     let mut kept = None;
-    let traversal = args.traversal;
+    // DIRT on the CPU at the cost model's choice walks with the faster traversal.
+    let traversal = match (&gpu, &chosen) {
+        (None, Some(ads)) => args
+            .ads
+            .traversal(args.traversal, Some(ads), &scene.scene, None)?,
+        _ => args.traversal.unwrap_or_default(),
+    };
     let build = std::time::Instant::now();
     let mut tracer: RenderTracer<'_> = {
         let tris = &scene.scene.triangles;

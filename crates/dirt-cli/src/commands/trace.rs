@@ -187,6 +187,13 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
             (Some(p), ads)
         }
     };
+    // DIRT on the CPU at the cost model's choice walks with the faster traversal.
+    let traversal = match (&gpu, &chosen) {
+        (None, Some(ads)) => args
+            .ads
+            .traversal(args.traversal, Some(ads), &scene, Some(&rays))?,
+        _ => args.traversal.unwrap_or_default(),
+    };
     let (mut tracer, built, build_time): (Box<dyn Tracer + '_>, BuildReport, Duration) =
         match (params, &gpu, chosen) {
             // The cost model built the CPU structure of its choice: keep it.
@@ -198,11 +205,7 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
                 let time = ads.timings.total();
                 eprintln!("build: the structure the cost model built while choosing is kept");
                 (
-                    Box::new(DirtCpu::from_ads(
-                        ads,
-                        tris,
-                        args.traversal.unwrap_or_default(),
-                    )),
+                    Box::new(DirtCpu::from_ads(ads, tris, traversal)),
                     built,
                     time,
                 )
@@ -213,12 +216,8 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
                         Some(peer) => peer,
                         None => Box::new(Brute::default()),
                     },
-                    (Some(p), Some(g)) => {
-                        Box::new(DirtGpu::new(g, p, args.traversal.unwrap_or_default()))
-                    }
-                    (Some(p), None) => {
-                        Box::new(DirtCpu::new(p, args.traversal.unwrap_or_default()))
-                    }
+                    (Some(p), Some(g)) => Box::new(DirtGpu::new(g, p, traversal)),
+                    (Some(p), None) => Box::new(DirtCpu::new(p, traversal)),
                 };
                 let start = Instant::now();
                 let built = tracer.build(tris).with_context(|| {
