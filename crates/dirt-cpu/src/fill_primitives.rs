@@ -15,7 +15,7 @@ use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::{Triangle, ViewSet};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Calls `f(list_index)` for every (tile, bucket) list triangle `t` belongs to.
 fn for_each_list(
@@ -57,26 +57,25 @@ pub fn fill_primitives(
     tris: &[Triangle],
 ) -> Result<IdLists, CpuError> {
     let n_lists = depth.len() * buckets as usize;
-    // Count.
+    // Count. The total comes from the prefix sum, not from one counter every
+    // thread adds to at every node (its cache line went back and forth).
     let counts: Vec<AtomicU32> = (0..n_lists).map(|_| AtomicU32::new(0)).collect();
-    let total = AtomicU64::new(0);
     tris.par_iter().for_each(|t| {
         for_each_list(views, depth, buckets, t, |k| {
             counts[k].fetch_add(1, Ordering::Relaxed);
-            total.fetch_add(1, Ordering::Relaxed);
         });
     });
-    let total = total.into_inner();
-    if total > u32::MAX as u64 {
-        return Err(CpuError::TooManyNodes { nodes: total });
-    }
-    // Exclusive prefix sum.
+    // Exclusive prefix sum, in 64 bits: more than u32::MAX nodes is an error
+    // (the offsets written past it are never used), not a wrap.
     let mut offsets = Vec::with_capacity(n_lists + 1);
-    let mut acc = 0u32;
+    let mut acc = 0u64;
     for c in &counts {
-        offsets.push(acc);
-        acc += c.load(Ordering::Relaxed);
+        offsets.push(acc as u32);
+        acc += u64::from(c.load(Ordering::Relaxed));
     }
+    let Ok(acc) = u32::try_from(acc) else {
+        return Err(CpuError::TooManyNodes { nodes: acc });
+    };
     offsets.push(acc);
     // Fill through atomic cursors: the counters become the cursors (one
     // transient u32 per list, not two).
