@@ -191,8 +191,16 @@ impl Polygon {
         }
         let mut out = Polygon::EMPTY;
         if self.clip_into(h, eps, &mut out) {
-            *self = out;
+            self.copy_from(&out);
         }
+    }
+
+    /// Becomes `other`, copying only its vertices (a whole `Polygon` is
+    /// 200 bytes, most of them unused; the clipping copies one per plane).
+    pub fn copy_from(&mut self, other: &Polygon) {
+        let n = other.len.min(MAX_POLY);
+        self.v[..n].copy_from_slice(&other.v[..n]);
+        self.len = n;
     }
 
     /// [`Polygon::clip`] writing the result to `out` (only its first `len`
@@ -353,10 +361,10 @@ pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32
         return;
     };
     // Scratch polygons for the per-tile clips: written only as far as used.
-    let (mut a, mut b) = (Polygon::EMPTY, Polygon::EMPTY);
+    let (mut a, mut b, mut column) = (Polygon::EMPTY, Polygon::EMPTY, Polygon::EMPTY);
     for i in i0..=i1 {
         let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
-        let mut column = poly;
+        column.copy_from(&poly);
         column.clip(&lo_x, v.eps);
         column.clip(&hi_x, v.eps);
         if column.len == 0 {
