@@ -100,11 +100,8 @@ def downsample(w, h, px, iw, ih):
     if w % iw or h % ih or w // iw != h // ih:
         sys.exit(f"FAIL: the screenshot is {w}x{h}, not a whole multiple of the {iw}x{ih} image")
     k = w // iw
-    return b"".join(
-        px[3 * ((y * k + k // 2) * w + x * k + k // 2) : 3 * ((y * k + k // 2) * w + x * k + k // 2) + 3]
-        for y in range(ih)
-        for x in range(iw)
-    )
+    centres = (3 * ((y * k + k // 2) * w + x * k + k // 2) for y in range(ih) for x in range(iw))
+    return b"".join(px[i : i + 3] for i in centres)
 
 
 def main():

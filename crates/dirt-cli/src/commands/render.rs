@@ -341,12 +341,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     };
     let mut kept = None;
     // DIRT on the CPU at the cost model's choice walks with the faster traversal.
-    let traversal = match (&gpu, &chosen) {
-        (None, Some(ads)) => args
-            .ads
-            .traversal(args.traversal, Some(ads), &scene.scene, None)?,
-        _ => args.traversal.unwrap_or_default(),
-    };
+    let on_cpu = chosen.as_ref().filter(|_| gpu.is_none());
+    let traversal = args
+        .ads
+        .traversal(args.traversal, on_cpu, &scene.scene, None)?;
     let build = std::time::Instant::now();
     let mut tracer: RenderTracer<'_> = {
         let tris = &scene.scene.triangles;

@@ -188,12 +188,10 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
         }
     };
     // DIRT on the CPU at the cost model's choice walks with the faster traversal.
-    let traversal = match (&gpu, &chosen) {
-        (None, Some(ads)) => args
-            .ads
-            .traversal(args.traversal, Some(ads), &scene, Some(&rays))?,
-        _ => args.traversal.unwrap_or_default(),
-    };
+    let on_cpu = chosen.as_ref().filter(|_| gpu.is_none());
+    let traversal = args
+        .ads
+        .traversal(args.traversal, on_cpu, &scene, Some(&rays))?;
     let (mut tracer, built, build_time): (Box<dyn Tracer + '_>, BuildReport, Duration) =
         match (params, &gpu, chosen) {
             // The cost model built the CPU structure of its choice: keep it.

@@ -751,6 +751,13 @@ impl<'g> GpuRenderer<'g> {
         dirt_gpu::read_back(self.gpu, buf, 0, bytes)
     }
 
+    /// [`GpuRenderer::read`] without blocking (a browser page awaits it).
+    async fn read_async(&mut self, buf: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+        self.transfers.read_backs += 1;
+        self.transfers.bytes_read += bytes;
+        dirt_gpu::read_back_async(self.gpu, buf, 0, bytes).await
+    }
+
     /// Records the trace of the ray buffer into the hit buffer; with
     /// `inspect`, submits what is recorded so far and reads both back.
     #[allow(clippy::too_many_arguments)]
@@ -1028,9 +1035,8 @@ impl<'g> GpuRenderer<'g> {
     /// awaits after each sample it presents on its canvas (the counters
     /// only, not the image).
     pub async fn counters_async(&mut self) -> Result<RenderState, RenderError> {
-        self.transfers.read_backs += 1;
-        self.transfers.bytes_read += STATE_BYTES;
-        counters_of(&dirt_gpu::read_back_async(self.gpu, &self.state, 0, STATE_BYTES).await?)
+        let state = self.state.clone();
+        counters_of(&self.read_async(&state, STATE_BYTES).await?)
     }
 
     /// Copies the sums and the counters into one staging buffer (recorded
@@ -1085,9 +1091,7 @@ impl<'g> GpuRenderer<'g> {
     /// browser page awaits where no canvas presents the sums.
     pub async fn mean_async(&mut self, samples: u32) -> Result<(Image, RenderState), RenderError> {
         let staging = self.encode_result();
-        self.transfers.read_backs += 1;
-        self.transfers.bytes_read += staging.size();
-        let bytes = dirt_gpu::read_back_async(self.gpu, &staging, 0, staging.size()).await?;
+        let bytes = self.read_async(&staging, staging.size()).await?;
         self.mean_of(&bytes, samples)
     }
 

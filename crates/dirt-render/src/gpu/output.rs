@@ -277,9 +277,8 @@ pub enum Drawn<'a> {
 pub struct SurfaceOutput {
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
+    /// The pass, and the device and queue the surface is configured on.
     output: Output,
-    device: wgpu::Device,
-    queue: wgpu::Queue,
 }
 
 impl SurfaceOutput {
@@ -338,8 +337,6 @@ impl SurfaceOutput {
             surface,
             config,
             output: Output::new(device, queue, format)?,
-            device: device.clone(),
-            queue: queue.clone(),
         })
     }
 
@@ -358,7 +355,7 @@ impl SurfaceOutput {
         if width > 0 && height > 0 && (width, height) != self.size() {
             self.config.width = width;
             self.config.height = height;
-            self.surface.configure(&self.device, &self.config);
+            self.surface.configure(&self.output.device, &self.config);
         }
     }
 
@@ -374,7 +371,7 @@ impl SurfaceOutput {
                 return Ok(false);
             }
             wgpu::CurrentSurfaceTexture::Outdated => {
-                self.surface.configure(&self.device, &self.config);
+                self.surface.configure(&self.output.device, &self.config);
                 return Ok(false);
             }
             other => {
@@ -387,6 +384,7 @@ impl SurfaceOutput {
             .texture
             .create_view(&wgpu::TextureViewDescriptor::default());
         let mut enc = self
+            .output
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("output"),
@@ -409,8 +407,8 @@ impl SurfaceOutput {
                 .output
                 .encode_bytes(&mut enc, &target, rgba, width, height)?,
         }
-        self.queue.submit([enc.finish()]);
-        self.queue.present(frame);
+        self.output.queue.submit([enc.finish()]);
+        self.output.queue.present(frame);
         Ok(true)
     }
 }
