@@ -234,10 +234,11 @@ struct Extent {
     hi: f32,
 }
 
-// dirt_math::clip::tile_depth_extent
-fn tile_depth_extent(v: View, poly: Polygon, i: u32, j: u32) -> Extent {
+// dirt_math::clip::tile_depth_extent: `clip_x` (`clip_y`) when the polygon's
+// tile range spans more than one column (row); the x planes are 0 and 1, y 2 and 3.
+fn tile_depth_extent(v: View, poly: Polygon, i: u32, j: u32, clip_x: bool, clip_y: bool) -> Extent {
     var p = poly;
-    for (var k = 0u; k < 4u; k++) {
+    for (var k = select(2u, 0u, clip_x); k < select(2u, 4u, clip_y); k++) {
         polygon_clip(&p, block_halfspace(v, i, i + 1u, j, j + 1u, k), v.eps);
         if p.len == 0u {
             return Extent(false, 0.0, 0.0);

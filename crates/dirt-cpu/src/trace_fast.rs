@@ -50,9 +50,7 @@
 //!   order ([`coherent_order`]: direction face, then Morton code of the
 //!   origin); the results go back to input order.
 //! - Tile boundary slopes ([`View::boundary`]) come from a table made once per
-//!   `trace` call; `floor_index` runs without a call to `floorf` (the x86-64
-//!   baseline has no rounding instruction), returning the same index for
-//!   every input, NaN and infinities included.
+//!   `trace` call.
 //!
 //! [`HiZCell::clip`]: dirt_math::dda::HiZCell::clip
 
@@ -63,7 +61,7 @@ use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
 use dirt_math::clip::{HalfSpace, Interval, ray_depth, view_frustum};
 use dirt_math::dda::{child_order, dilation, hiz_width};
 use dirt_math::encode::ordered_to_f32;
-use dirt_math::num::{fmax, fmin};
+use dirt_math::num::{floor_index, fmax, fmin};
 use dirt_math::triangle::{RayShear, intersect_closest};
 use dirt_math::{Hit, Ray, Triangle, View, ViewRay};
 use std::array::from_fn;
@@ -298,19 +296,7 @@ fn clip_to_view(v: &View, vr: &ViewRay, tmin: f32, tmax: f32) -> (Interval, Opti
     }
 }
 
-/// `dirt_math::num::floor_index` (`floor(x)` clamped to `[0, last]`, NaN gives
-/// 0) without `floor`: `floor(x) >= L` is `x >= L` for the integer `L = last as f32`,
-/// and below it `floor` and truncation agree on `x >= 0`.
-#[inline]
-fn floor_index(x: f32, last: u32) -> u32 {
-    if x >= 0.0 {
-        if x >= last as f32 { last } else { x as u32 }
-    } else {
-        0
-    }
-}
-
-/// `dirt_math::dda::index_range` with [`floor_index`] above.
+/// `dirt_math::dda::index_range`, inlined.
 #[inline]
 fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
     let lo = fmin(a, b) - d;
@@ -986,41 +972,6 @@ mod tests {
             for (c, h) in sides.iter().zip(&planes) {
                 let one = Cut::of(h, &vr);
                 prop_assert_eq!((c.lo.to_bits(), c.hi.to_bits()), (one.lo.to_bits(), one.hi.to_bits()));
-            }
-        }
-    }
-
-    #[test]
-    fn floor_index_is_the_plain_one() {
-        let last = [0u32, 1, 7, 127, 4095, (1 << 24) - 1, u32::MAX];
-        let mut xs = vec![
-            0.0f32,
-            -0.0,
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::MIN_POSITIVE,
-            -f32::MIN_POSITIVE,
-            f32::MAX,
-            f32::MIN,
-            1e-45,
-            -1e-45,
-        ];
-        for k in -300..300 {
-            let x = k as f32 * 0.5;
-            xs.extend([x, x.next_up(), x.next_down()]);
-        }
-        for e in 0..40 {
-            let x = (2.0f32).powi(e);
-            xs.extend([x, x.next_up(), x.next_down(), -x]);
-        }
-        for &x in &xs {
-            for &l in &last {
-                assert_eq!(
-                    floor_index(x, l),
-                    dirt_math::num::floor_index(x, l),
-                    "x = {x:e}, last = {l}"
-                );
             }
         }
     }
