@@ -15,7 +15,7 @@ use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::{Triangle, ViewSet};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 /// Calls `f(list_index)` for every (tile, bucket) list triangle `t` belongs to.
 fn for_each_list(
@@ -49,22 +49,79 @@ fn for_each_list(
     }
 }
 
+/// Triangles per piece of the count pass (each piece keeps the lists its
+/// triangles join, for the fill).
+const PIECE: usize = 256;
+
+/// Most list nodes the count pass keeps for the fill, in all pieces together
+/// (a piece past it keeps nothing, and the fill finds its lists again): the
+/// kept nodes cost as much memory as the id buffer they become, and past
+/// `u32::MAX` nodes the build is an error anyway.
+const KEEP_MAX: u64 = u32::MAX as u64;
+
+/// What the count pass found for one piece of triangles: `lists[ends[t-1]..ends[t]]`
+/// are the lists triangle `first + t` joins, in [`for_each_list`]'s order.
+struct Kept {
+    ends: Vec<u32>,
+    lists: Vec<u32>,
+}
+
 /// Builds the lists from the triangles and the depth bounds of `fill_depth`.
+///
+/// The coverage of a triangle (clipping it to every tile it touches) is the
+/// stage's cost; the count pass keeps the list indices it finds, piece by
+/// piece, so the fill writes the ids from them instead of clipping again.
 pub fn fill_primitives(
     views: &ViewSet,
     depth: &[[u32; 2]],
     buckets: u32,
     tris: &[Triangle],
 ) -> Result<IdLists, CpuError> {
+    fill_keeping(views, depth, buckets, tris, KEEP_MAX)
+}
+
+/// [`fill_primitives`] keeping at most `keep_max` nodes from the count pass.
+fn fill_keeping(
+    views: &ViewSet,
+    depth: &[[u32; 2]],
+    buckets: u32,
+    tris: &[Triangle],
+    keep_max: u64,
+) -> Result<IdLists, CpuError> {
     let n_lists = depth.len() * buckets as usize;
     // Count. The total comes from the prefix sum, not from one counter every
     // thread adds to at every node (its cache line went back and forth).
     let counts: Vec<AtomicU32> = (0..n_lists).map(|_| AtomicU32::new(0)).collect();
-    tris.par_iter().for_each(|t| {
-        for_each_list(views, depth, buckets, t, |k| {
-            counts[k].fetch_add(1, Ordering::Relaxed);
-        });
-    });
+    // List indices are kept as u32; more lists than that keep nothing.
+    let keep = u32::try_from(n_lists).is_ok();
+    let kept_nodes = AtomicU64::new(0);
+    let kept: Vec<Option<Kept>> = tris
+        .par_chunks(PIECE)
+        .map(|piece| {
+            let mut found = Kept {
+                ends: Vec::with_capacity(piece.len()),
+                lists: Vec::new(),
+            };
+            for t in piece {
+                for_each_list(views, depth, buckets, t, |k| {
+                    counts[k].fetch_add(1, Ordering::Relaxed);
+                    if keep {
+                        found.lists.push(k as u32);
+                    }
+                });
+                // Fewer than KEEP_MAX nodes fit in u32 ends; past it nothing is kept.
+                found
+                    .ends
+                    .push(found.lists.len().min(u32::MAX as usize) as u32);
+            }
+            let n = found.lists.len() as u64;
+            let before = kept_nodes.fetch_add(n, Ordering::Relaxed);
+            (keep && before + n <= keep_max).then(|| {
+                found.lists.shrink_to_fit();
+                found
+            })
+        })
+        .collect();
     // Exclusive prefix sum, in 64 bits: more than u32::MAX nodes is an error
     // (the offsets written past it are never used), not a wrap.
     let mut offsets = Vec::with_capacity(n_lists + 1);
@@ -84,26 +141,112 @@ pub fn fill_primitives(
         c.store(o, Ordering::Relaxed);
     }
     let ids: Vec<AtomicU32> = (0..acc).map(|_| AtomicU32::new(u32::MAX)).collect();
-    tris.par_iter().enumerate().for_each(|(id, t)| {
-        for_each_list(views, depth, buckets, t, |k| {
-            let at = cursors[k].fetch_add(1, Ordering::Relaxed);
-            ids[at as usize].store(id as u32, Ordering::Relaxed);
+    let put = |k: usize, id: usize| {
+        let at = cursors[k].fetch_add(1, Ordering::Relaxed);
+        ids[at as usize].store(id as u32, Ordering::Relaxed);
+    };
+    kept.into_par_iter()
+        .zip(tris.par_chunks(PIECE))
+        .enumerate()
+        .for_each(|(p, (found, piece))| {
+            let first = p * PIECE;
+            match found {
+                Some(Kept { ends, lists }) => {
+                    let mut start = 0;
+                    for (t, &end) in ends.iter().enumerate() {
+                        for &k in &lists[start..end as usize] {
+                            put(k as usize, first + t);
+                        }
+                        start = end as usize;
+                    }
+                }
+                None => {
+                    for (t, tri) in piece.iter().enumerate() {
+                        for_each_list(views, depth, buckets, tri, |k| put(k, first + t));
+                    }
+                }
+            }
         });
-    });
+    drop(cursors);
     let mut ids: Vec<u32> = ids.into_iter().map(AtomicU32::into_inner).collect();
     // Every slot was written exactly once (the counts and the fill walk the same pairs).
     debug_assert!(ids.iter().all(|&x| x != u32::MAX));
-    // Only lists of two or more ids need sorting (most hold zero or one);
-    // collecting just those keeps this index small.
-    let mut slices: Vec<&mut [u32]> = Vec::new();
-    let mut rest = ids.as_mut_slice();
-    for w in offsets.windows(2) {
-        let (head, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
-        if head.len() > 1 {
-            slices.push(head);
-        }
-        rest = tail;
-    }
-    slices.par_iter_mut().for_each(|s| s.sort_unstable());
+    sort_lists(&offsets, &mut ids);
     Ok(IdLists { offsets, ids })
+}
+
+/// Sorts every list (the fill's atomic cursors leave each in an arbitrary
+/// order), in parallel over runs of lists of about equal node counts, with no
+/// index of the lists (it would cost 16 bytes a list).
+fn sort_lists(offsets: &[u32], ids: &mut [u32]) {
+    let runs = 4 * rayon::current_num_threads();
+    let per_run = ids.len().div_ceil(runs).max(1);
+    let mut parts: Vec<(&[u32], &mut [u32])> = Vec::with_capacity(runs + 1);
+    let (mut rest, mut lists, mut done) = (ids, offsets, 0usize);
+    while lists.len() > 1 {
+        // The first list boundary at or past `done + per_run` ends this run.
+        let want = (done + per_run).min(u32::MAX as usize) as u32;
+        let n = lists
+            .partition_point(|&o| o < want)
+            .clamp(1, lists.len() - 1);
+        let end = lists[n] as usize;
+        let (head, tail) = rest.split_at_mut(end - done);
+        parts.push((&lists[..=n], head));
+        (rest, lists, done) = (tail, &lists[n..], end);
+    }
+    parts.into_par_iter().for_each(|(lists, ids)| {
+        let base = lists[0] as usize;
+        for w in lists.windows(2) {
+            let (a, b) = (w[0] as usize - base, w[1] as usize - base);
+            if b - a > 1 {
+                ids[a..b].sort_unstable();
+            }
+        }
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dirt_core::AdsParams;
+
+    /// The fill finds again the lists of pieces the count pass kept nothing
+    /// for: none kept, some kept, all kept give the same lists.
+    #[test]
+    fn pieces_kept_or_not_give_the_same_lists() {
+        for name in ["cornell", "foliage"] {
+            let tris = dirt_scene::builtin(name).expect("built-in").triangles;
+            let params = AdsParams {
+                resolution: 32,
+                ..AdsParams::default()
+            };
+            let views = dirt_core::views_for(&tris, &params).expect("views");
+            let depth = crate::fill_depth::fill_depth(&views, &tris);
+            let all = fill_keeping(&views, &depth, params.buckets, &tris, KEEP_MAX).expect("fill");
+            let nodes = all.ids.len() as u64;
+            assert!(
+                nodes > 0 && tris.len() > 2 * PIECE,
+                "{name}: several pieces"
+            );
+            for keep_max in [0, nodes / 3, nodes - 1] {
+                let some =
+                    fill_keeping(&views, &depth, params.buckets, &tris, keep_max).expect("fill");
+                assert_eq!(some.offsets, all.offsets, "{name}, keep {keep_max}");
+                assert_eq!(some.ids, all.ids, "{name}, keep {keep_max}");
+            }
+        }
+    }
+
+    /// The runs of the sort split at list boundaries: every list sorted, none
+    /// mixed with its neighbours, whatever the run length.
+    #[test]
+    fn lists_are_sorted_within_their_bounds() {
+        let offsets = [0u32, 0, 3, 4, 9, 9, 12];
+        let ids = [5u32, 1, 3, 7, 9, 8, 2, 6, 0, 4, 4, 1];
+        let mut got = ids;
+        sort_lists(&offsets, &mut got);
+        assert_eq!(got, [1, 3, 5, 7, 0, 2, 6, 8, 9, 1, 4, 4]);
+        let mut empty: [u32; 0] = [];
+        sort_lists(&[0], &mut empty);
+    }
 }

@@ -70,9 +70,10 @@ fn peak_build_memory_is_within_the_stated_margin_of_the_structure() {
                 peak as f64 / model
             );
             // On top of the structure come the build's transients: one u32
-            // counter per list (counts, then cursors), the atomic ids before
-            // sorting, and the copy of the depth bounds: at most 2.5x the
-            // structure (measured 1.66x to 2.29x; ARCHITECTURE.md, "Memory").
+            // counter per list (counts, then cursors), the list indices the
+            // count pass keeps for the fill, the atomic ids before sorting,
+            // and the copy of the depth bounds: at most 2.5x the structure
+            // (measured 1.96x to 1.99x; ARCHITECTURE.md, "Memory").
             assert!(structure > 0.0);
             assert!(
                 ratio <= 2.5,
