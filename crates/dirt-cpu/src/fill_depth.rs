@@ -6,15 +6,72 @@
 //! the order-preserving encoding of `dirt_math::encode`; an empty tile holds
 //! `[enc(+inf), enc(-inf)]`. Views without content have no slot, no entries
 //! and no pass. Updates are atomic min/max, as on the GPU.
+//!
+//! The coverage of a triangle (clipping it to every tile it touches) is the
+//! build's cost, and `fill_primitives` needs the same fragments again: the
+//! build keeps them ([`Fragments`], up to a budget) so that it does not clip
+//! every triangle twice.
 
+use crate::blocks::Blocks;
 use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF, f32_to_ordered};
 use dirt_math::{Triangle, ViewSet};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
+
+/// Triangles per piece: the unit in which the build keeps what one pass
+/// found for the next, and of the parallel loops over triangles.
+pub(crate) const PIECE: usize = 256;
+
+/// Calls `f(tile, zlo, zhi)` for every tile of every view with content that
+/// triangle `t` touches (`tile` indexes the depth bounds), with its
+/// conservative depth extent there: views in order, then
+/// [`for_each_covered_tile`]'s order.
+pub(crate) fn for_each_fragment(views: &ViewSet, t: &Triangle, mut f: impl FnMut(usize, f32, f32)) {
+    for v in &views.views {
+        if v.has_content {
+            let base = v.slot as usize * v.tile_count();
+            let tiles = v.tiles as usize;
+            let tv = [
+                v.to_view(t.vertex(0)),
+                v.to_view(t.vertex(1)),
+                v.to_view(t.vertex(2)),
+            ];
+            for_each_covered_tile(v, tv, |i, j, lo, hi| {
+                f(base + j as usize * tiles + i as usize, lo, hi);
+            });
+        }
+    }
+}
+
+/// The fragments `fill_depth` found, kept for `fill_primitives`: per piece of
+/// [`PIECE`] triangles, `None` where the budget had run out (the next stage
+/// finds those again).
+#[derive(Debug, Default)]
+pub struct Fragments {
+    pub(crate) pieces: Vec<Option<Piece>>,
+}
+
+/// One piece's fragments: triangle `t` of the piece has
+/// `frags[ends[t-1]..ends[t]]` (`(tile, zlo, zhi)`, in [`for_each_fragment`]'s order).
+#[derive(Debug)]
+pub(crate) struct Piece {
+    pub(crate) ends: Vec<u32>,
+    pub(crate) frags: Blocks<(u32, f32, f32)>,
+}
 
 /// Depth bounds of every tile of every view, encoded.
 pub fn fill_depth(views: &ViewSet, tris: &[Triangle]) -> Vec<[u32; 2]> {
+    fill_depth_keeping(views, tris, 0).0
+}
+
+/// [`fill_depth`], keeping the fragments of whole pieces while they number at
+/// most `keep_max` in all.
+pub fn fill_depth_keeping(
+    views: &ViewSet,
+    tris: &[Triangle],
+    keep_max: usize,
+) -> (Vec<[u32; 2]>, Fragments) {
     let per_view = views.views.first().map_or(0, |v| v.tile_count());
     let total = views.slots() * per_view;
     let bounds: Vec<[AtomicU32; 2]> = (0..total)
@@ -25,26 +82,56 @@ pub fn fill_depth(views: &ViewSet, tris: &[Triangle]) -> Vec<[u32; 2]> {
             ]
         })
         .collect();
-    for v in &views.views {
-        if v.has_content {
-            let base = v.slot as usize * per_view;
-            let tiles = v.tiles as usize;
-            tris.par_iter().for_each(|t| {
-                let tv = [
-                    v.to_view(t.vertex(0)),
-                    v.to_view(t.vertex(1)),
-                    v.to_view(t.vertex(2)),
-                ];
-                for_each_covered_tile(v, tv, |i, j, lo, hi| {
-                    let e = &bounds[base + j as usize * tiles + i as usize];
+    // Tiles and fragment ends are kept as u32.
+    let keep_max = if u32::try_from(total).is_ok() {
+        keep_max.min(u32::MAX as usize - 1)
+    } else {
+        0
+    };
+    let kept = AtomicUsize::new(0);
+    let pieces = tris
+        .par_chunks(PIECE)
+        .map(|piece| {
+            // What is left of the budget; a piece that would take more keeps
+            // nothing (and frees what it took at once: with each piece in
+            // flight bounded by the budget, this stage's peak stays below
+            // fill_primitives', whose lists cost at least as much).
+            let room = keep_max.saturating_sub(kept.load(Ordering::Relaxed));
+            let mut keep = room > 0;
+            let mut found = Piece {
+                ends: Vec::new(),
+                frags: Blocks::new(),
+            };
+            for t in piece {
+                for_each_fragment(views, t, |tile, lo, hi| {
+                    let e = &bounds[tile];
                     e[0].fetch_min(f32_to_ordered(lo), Ordering::Relaxed);
                     e[1].fetch_max(f32_to_ordered(hi), Ordering::Relaxed);
+                    if keep {
+                        if found.frags.len() < room {
+                            found.frags.push((tile as u32, lo, hi));
+                        } else {
+                            keep = false;
+                            found.frags = Blocks::new();
+                        }
+                    }
                 });
-            });
-        }
-    }
-    bounds
+                if keep {
+                    // room < u32::MAX: the ends fit.
+                    found.ends.push(found.frags.len() as u32);
+                }
+            }
+            let n = found.frags.len();
+            let before = kept.fetch_add(n, Ordering::Relaxed);
+            (keep && before + n <= keep_max).then(|| {
+                found.frags.trim();
+                found
+            })
+        })
+        .collect();
+    let depth = bounds
         .into_iter()
         .map(|[a, b]| [a.into_inner(), b.into_inner()])
-        .collect()
+        .collect();
+    (depth, Fragments { pieces })
 }

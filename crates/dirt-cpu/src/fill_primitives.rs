@@ -9,13 +9,33 @@
 //! arbitrary; the CPU sorts each list afterwards so its structure is reproducible.
 
 use crate::CpuError;
+use crate::blocks::Blocks;
+use crate::fill_depth::{Fragments, PIECE, Piece, for_each_fragment};
 use dirt_core::IdLists;
 use dirt_math::bucket::bucket_range;
-use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::{Triangle, ViewSet};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+
+/// Calls `f(list_index)` for every bucket of the depth bounds `depth[tile]`
+/// that a triangle's fragment `[lo, hi]` in `tile` overlaps.
+#[inline]
+fn for_each_bucket(
+    depth: &[[u32; 2]],
+    buckets: u32,
+    (tile, lo, hi): (usize, f32, f32),
+    mut f: impl FnMut(usize),
+) {
+    let [zmin, zmax] = depth[tile];
+    if let Some((b0, b1)) =
+        bucket_range(lo, hi, ordered_to_f32(zmin), ordered_to_f32(zmax), buckets)
+    {
+        for b in b0..=b1 {
+            f(tile * buckets as usize + b as usize);
+        }
+    }
+}
 
 /// Calls `f(list_index)` for every (tile, bucket) list triangle `t` belongs to.
 fn for_each_list(
@@ -25,45 +45,22 @@ fn for_each_list(
     t: &Triangle,
     mut f: impl FnMut(usize),
 ) {
-    for v in &views.views {
-        let tiles = v.tiles as usize;
-        if v.has_content {
-            let base = v.slot as usize * v.tile_count();
-            let tv = [
-                v.to_view(t.vertex(0)),
-                v.to_view(t.vertex(1)),
-                v.to_view(t.vertex(2)),
-            ];
-            for_each_covered_tile(v, tv, |i, j, lo, hi| {
-                let tile = base + j as usize * tiles + i as usize;
-                let [zmin, zmax] = depth[tile];
-                if let Some((b0, b1)) =
-                    bucket_range(lo, hi, ordered_to_f32(zmin), ordered_to_f32(zmax), buckets)
-                {
-                    for b in b0..=b1 {
-                        f(tile * buckets as usize + b as usize);
-                    }
-                }
-            });
-        }
-    }
+    for_each_fragment(views, t, |tile, lo, hi| {
+        for_each_bucket(depth, buckets, (tile, lo, hi), &mut f);
+    });
 }
-
-/// Triangles per piece of the count pass (each piece keeps the lists its
-/// triangles join, for the fill).
-const PIECE: usize = 256;
 
 /// Most list nodes the count pass keeps for the fill, in all pieces together
 /// (a piece past it keeps nothing, and the fill finds its lists again): the
 /// kept nodes cost as much memory as the id buffer they become, and past
 /// `u32::MAX` nodes the build is an error anyway.
-const KEEP_MAX: u64 = u32::MAX as u64;
+const KEEP_MAX: u64 = u32::MAX as u64 - 1;
 
 /// What the count pass found for one piece of triangles: `lists[ends[t-1]..ends[t]]`
 /// are the lists triangle `first + t` joins, in [`for_each_list`]'s order.
 struct Kept {
     ends: Vec<u32>,
-    lists: Vec<u32>,
+    lists: Blocks<u32>,
 }
 
 /// Builds the lists from the triangles and the depth bounds of `fill_depth`.
@@ -77,15 +74,30 @@ pub fn fill_primitives(
     buckets: u32,
     tris: &[Triangle],
 ) -> Result<IdLists, CpuError> {
-    fill_keeping(views, depth, buckets, tris, KEEP_MAX)
+    fill_keeping(views, depth, buckets, tris, Fragments::default(), KEEP_MAX)
 }
 
-/// [`fill_primitives`] keeping at most `keep_max` nodes from the count pass.
+/// [`fill_primitives`] from the fragments `fill_depth` kept
+/// ([`fill_depth_keeping`](crate::fill_depth::fill_depth_keeping) over the
+/// same views and triangles): the count pass clips only the triangles of the
+/// pieces it kept nothing for.
+pub fn fill_primitives_from(
+    views: &ViewSet,
+    depth: &[[u32; 2]],
+    buckets: u32,
+    tris: &[Triangle],
+    fragments: Fragments,
+) -> Result<IdLists, CpuError> {
+    fill_keeping(views, depth, buckets, tris, fragments, KEEP_MAX)
+}
+
+/// [`fill_primitives_from`] keeping at most `keep_max` nodes from the count pass.
 fn fill_keeping(
     views: &ViewSet,
     depth: &[[u32; 2]],
     buckets: u32,
     tris: &[Triangle],
+    fragments: Fragments,
     keep_max: u64,
 ) -> Result<IdLists, CpuError> {
     let n_lists = depth.len() * buckets as usize;
@@ -95,30 +107,51 @@ fn fill_keeping(
     // List indices are kept as u32; more lists than that keep nothing.
     let keep = u32::try_from(n_lists).is_ok();
     let kept_nodes = AtomicU64::new(0);
-    let kept: Vec<Option<Kept>> = tris
-        .par_chunks(PIECE)
-        .map(|piece| {
-            let mut found = Kept {
-                ends: Vec::with_capacity(piece.len()),
-                lists: Vec::new(),
+    let mut frags = fragments.pieces;
+    frags.resize_with(tris.len().div_ceil(PIECE), || None);
+    let kept: Vec<Option<Kept>> = frags
+        .into_par_iter()
+        .zip(tris.par_chunks(PIECE))
+        .map(|(frags, piece)| {
+            let mut ends = Vec::with_capacity(piece.len());
+            let mut lists = Blocks::new();
+            let add = |lists: &mut Blocks<u32>, k: usize| {
+                counts[k].fetch_add(1, Ordering::Relaxed);
+                if keep {
+                    lists.push(k as u32);
+                }
             };
-            for t in piece {
-                for_each_list(views, depth, buckets, t, |k| {
-                    counts[k].fetch_add(1, Ordering::Relaxed);
-                    if keep {
-                        found.lists.push(k as u32);
+            // Per triangle, its fragments: kept by fill_depth, or found again.
+            match frags {
+                Some(Piece {
+                    ends: f_ends,
+                    frags,
+                }) => {
+                    let (mut all, mut start) = (frags.iter(), 0);
+                    for &end in &f_ends {
+                        for (tile, lo, hi) in all.by_ref().take(end as usize - start) {
+                            for_each_bucket(depth, buckets, (tile as usize, lo, hi), |k| {
+                                add(&mut lists, k)
+                            });
+                        }
+                        start = end as usize;
+                        ends.push(lists.len());
                     }
-                });
-                // Fewer than KEEP_MAX nodes fit in u32 ends; past it nothing is kept.
-                found
-                    .ends
-                    .push(found.lists.len().min(u32::MAX as usize) as u32);
+                }
+                None => {
+                    for t in piece {
+                        for_each_list(views, depth, buckets, t, |k| add(&mut lists, k));
+                        ends.push(lists.len());
+                    }
+                }
             }
-            let n = found.lists.len() as u64;
+            let n = lists.len() as u64;
             let before = kept_nodes.fetch_add(n, Ordering::Relaxed);
             (keep && before + n <= keep_max).then(|| {
-                found.lists.shrink_to_fit();
-                found
+                lists.trim();
+                // Fewer than KEEP_MAX nodes: the ends fit in u32.
+                let ends = ends.iter().map(|&e| e as u32).collect();
+                Kept { ends, lists }
             })
         })
         .collect();
@@ -152,9 +185,9 @@ fn fill_keeping(
             let first = p * PIECE;
             match found {
                 Some(Kept { ends, lists }) => {
-                    let mut start = 0;
+                    let (mut all, mut start) = (lists.iter(), 0);
                     for (t, &end) in ends.iter().enumerate() {
-                        for &k in &lists[start..end as usize] {
+                        for k in all.by_ref().take(end as usize - start) {
                             put(k as usize, first + t);
                         }
                         start = end as usize;
@@ -210,8 +243,9 @@ mod tests {
     use super::*;
     use dirt_core::AdsParams;
 
-    /// The fill finds again the lists of pieces the count pass kept nothing
-    /// for: none kept, some kept, all kept give the same lists.
+    /// The count pass finds again the fragments of pieces `fill_depth` kept
+    /// nothing for, and the fill the lists of pieces the count pass kept
+    /// nothing for: none kept, some kept, all kept give the same lists.
     #[test]
     fn pieces_kept_or_not_give_the_same_lists() {
         for name in ["cornell", "foliage"] {
@@ -222,17 +256,30 @@ mod tests {
             };
             let views = dirt_core::views_for(&tris, &params).expect("views");
             let depth = crate::fill_depth::fill_depth(&views, &tris);
-            let all = fill_keeping(&views, &depth, params.buckets, &tris, KEEP_MAX).expect("fill");
+            let b = params.buckets;
+            let all = fill_primitives(&views, &depth, b, &tris).expect("fill");
             let nodes = all.ids.len() as u64;
             assert!(
                 nodes > 0 && tris.len() > 2 * PIECE,
                 "{name}: several pieces"
             );
-            for keep_max in [0, nodes / 3, nodes - 1] {
-                let some =
-                    fill_keeping(&views, &depth, params.buckets, &tris, keep_max).expect("fill");
-                assert_eq!(some.offsets, all.offsets, "{name}, keep {keep_max}");
-                assert_eq!(some.ids, all.ids, "{name}, keep {keep_max}");
+            let (_, every) = crate::fill_depth::fill_depth_keeping(&views, &tris, usize::MAX);
+            let frags: usize = every.pieces.iter().flatten().map(|p| p.frags.len()).sum();
+            assert!(every.pieces.iter().all(Option::is_some) && frags > 0);
+            for keep_frags in [0, frags / 2, frags] {
+                for keep_nodes in [0, nodes / 3, nodes - 1, KEEP_MAX] {
+                    let (d, kept) =
+                        crate::fill_depth::fill_depth_keeping(&views, &tris, keep_frags);
+                    assert_eq!(
+                        d, depth,
+                        "{name}: the depth bounds do not depend on what is kept"
+                    );
+                    let some =
+                        fill_keeping(&views, &depth, b, &tris, kept, keep_nodes).expect("fill");
+                    let at = format!("{name}, fragments {keep_frags}, nodes {keep_nodes}");
+                    assert_eq!(some.offsets, all.offsets, "{at}");
+                    assert_eq!(some.ids, all.ids, "{at}");
+                }
             }
         }
     }

@@ -19,6 +19,7 @@
 //! | MMRT (004) | [`screen_space`] | cubemap | all fragments in `B` depth buckets (A-buffer) |
 //! | single layer | [`screen_space`] | one view at the camera | the nearest fragment |
 
+mod blocks;
 pub mod brute_force;
 pub mod cache;
 pub mod cost;
@@ -92,11 +93,17 @@ impl Ads {
 
     fn build_over(views: ViewSet, tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
         let t0 = Instant::now();
-        let depth = fill_depth::fill_depth(&views, tris);
+        // fill_primitives needs fill_depth's fragments again: kept while they
+        // take no more memory than the list offsets will (12 B a fragment,
+        // 4 B a list), which keeps the peak within its bound (ARCHITECTURE.md, "Memory").
+        let tiles = views.slots() * views.views.first().map_or(0, |v| v.tile_count());
+        let keep = tiles.saturating_mul(params.buckets as usize) / 3;
+        let (depth, fragments) = fill_depth::fill_depth_keeping(&views, tris, keep);
         let t1 = Instant::now();
         let hiz = mip_depth::mip_depth(&views, &depth);
         let t2 = Instant::now();
-        let lists = fill_primitives::fill_primitives(&views, &depth, params.buckets, tris)?;
+        let lists =
+            fill_primitives::fill_primitives_from(&views, &depth, params.buckets, tris, fragments)?;
         let t3 = Instant::now();
         let timings = BuildTimings {
             fill_depth: t1 - t0,
