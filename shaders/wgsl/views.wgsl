@@ -170,30 +170,38 @@ fn views_from_bounds() {
         var apex: vec3<f32>;
         var near: f32;
         let r = fmax(length3(vec3<f32>(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])) * 0.5, 1.17549435e-38);
+        var fwd = vec3<f32>(0.0, 0.0, 1.0);
         if params.has_center == 0u {
+            // dirt_math::view::single_axis: the thinnest axis (ties: z, then y).
+            let e = vec3<f32>(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+            if e[0] < e[1] && e[0] < e[2] {
+                fwd = vec3<f32>(1.0, 0.0, 0.0);
+            } else if e[1] < e[2] {
+                fwd = vec3<f32>(0.0, 1.0, 0.0);
+            }
             let dist = 1.5 * r + r;
-            apex = vec3<f32>(c[0] - 0.0 * dist, c[1] - 0.0 * dist, c[2] - dist);
+            apex = vec3<f32>(c[0] - fwd[0] * dist, c[1] - fwd[1] * dist, c[2] - fwd[2] * dist);
             near = dist - r * 1.01;
         } else {
             let eye = params.center;
             let d = vec3<f32>(c[0] - eye[0], c[1] - eye[1], c[2] - eye[2]);
             let rcp = div_cr(1.0, length3(d));
-            var fwd = vec3<f32>(0.0, 0.0, 1.0);
             if is_finite(rcp) && rcp > 0.0 {
                 fwd = scale3(d, rcp);
             }
-            var up_hint = vec3<f32>(0.0, 1.0, 0.0);
-            if abs(fwd[1]) > 0.9 {
-                up_hint = vec3<f32>(1.0, 0.0, 0.0);
-            }
-            let rc = cross3(up_hint, fwd);
-            let right = positive_zeros(scale3(rc, div_cr(1.0, length3(rc))));
-            t.up = positive_zeros(cross3(fwd, right));
-            t.forward = positive_zeros(fwd);
-            t.right = right;
             apex = eye;
             near = near_distance(eye, lo, hi);
         }
+        // The axes of ViewSet::single (exact for a unit axis: its products are 0 and ±1).
+        var up_hint = vec3<f32>(0.0, 1.0, 0.0);
+        if abs(fwd[1]) > 0.9 {
+            up_hint = vec3<f32>(1.0, 0.0, 0.0);
+        }
+        let rc = cross3(up_hint, fwd);
+        let right = positive_zeros(scale3(rc, div_cr(1.0, length3(rc))));
+        t.up = positive_zeros(cross3(fwd, right));
+        t.forward = positive_zeros(fwd);
+        t.right = right;
         views[0] = fit_view(t, apex, fmax(near, 1.17549435e-38), lo, hi, 0u);
     }
     if bad {

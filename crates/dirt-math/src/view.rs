@@ -214,6 +214,21 @@ pub const EDGE_RIGHT: usize = 1; // x = +tan·z
 pub const EDGE_BOTTOM: usize = 2; // y = -tan·z
 pub const EDGE_TOP: usize = 3; // y = +tan·z
 
+/// The direction a [`ViewSet::single`] without an eye looks along: the unit
+/// axis of the smallest extent (ties go to z, then y). Seen along it, a flat
+/// scene (a terrain, a floor) spreads over the most tiles, so each tile lists
+/// the fewest triangles; seen edge-on, one tile can list a whole row of them.
+/// The `views` stage (`views.wgsl`) makes the same choice on the GPU.
+pub fn single_axis(extent: Vec3) -> Vec3 {
+    if extent.x < extent.y && extent.x < extent.z {
+        Vec3::X
+    } else if extent.y < extent.z {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    }
+}
+
 /// Cube faces: +X, -X, +Y, -Y, +Z, -Z (forward, right, up).
 const CUBE_AXES: [[Vec3; 3]; 6] = [
     [Vec3::X, Vec3::NEG_Z, Vec3::Y],
@@ -298,10 +313,11 @@ impl ViewSet {
         set
     }
 
-    /// One 90° view. Without `eye` it is placed on the -Z side of the bounds,
-    /// far enough that the bounding sphere lies inside its frustum: then every
-    /// triangle is seen and tracing is exact for every ray. With `eye`, it looks
-    /// from there towards the bounds' centre; geometry outside its frustum is not seen.
+    /// One 90° view. Without `eye` it looks along the bounds' thinnest axis
+    /// ([`single_axis`]) from its negative side, far enough that the bounding
+    /// sphere lies inside its frustum: then every triangle is seen and tracing
+    /// is exact for every ray. With `eye`, it looks from there towards the
+    /// bounds' centre; geometry outside its frustum is not seen.
     pub fn single(eye: Option<Vec3>, bounds: &Aabb, tiles: u32) -> ViewSet {
         let c = bounds.center();
         let r = (bounds.extent().length() * 0.5).max(f32::MIN_POSITIVE);
@@ -309,7 +325,8 @@ impl ViewSet {
             None => {
                 // sin(45°) = 1/sqrt(2): distance sqrt(2)·r puts the sphere inside the cone; 1.5·r adds room.
                 let dist = 1.5 * r + r;
-                (c - Vec3::Z * dist, Vec3::Z, dist - r * 1.01)
+                let f = single_axis(bounds.extent());
+                (c - f * dist, f, dist - r * 1.01)
             }
             Some(e) => {
                 let f = (c - e).try_normalize().unwrap_or(Vec3::Z);
