@@ -5,7 +5,8 @@
 //! flight that slack decided the build's peak memory. Here each new block
 //! holds as many items as the blocks before it (so few blocks), at least
 //! [`MIN`] and at most [`MAX`]: the slack stays below one block and under the
-//! items already kept, and nothing is copied.
+//! items already kept, and nothing is copied. [`Groups`] adds where each
+//! triangle's items end: what a pass keeps for one piece of triangles.
 
 /// Items in the first block.
 const MIN: usize = 256;
@@ -55,9 +56,77 @@ impl<T: Copy> Blocks<T> {
     }
 }
 
+/// [`Blocks`] in consecutive groups (one per triangle of a piece).
+#[derive(Debug)]
+pub(crate) struct Groups<T> {
+    /// Where each group's items end; below `u32::MAX` items in all (the
+    /// build's budgets keep them there).
+    ends: Vec<u32>,
+    items: Blocks<T>,
+}
+
+impl<T: Copy> Groups<T> {
+    pub(crate) fn new() -> Self {
+        Groups {
+            ends: Vec::new(),
+            items: Blocks::new(),
+        }
+    }
+
+    /// Items in all groups.
+    pub(crate) fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// An item of the open group.
+    pub(crate) fn push(&mut self, x: T) {
+        self.items.push(x);
+    }
+
+    /// Ends the open group (its items are those pushed since the last close).
+    pub(crate) fn close(&mut self) {
+        self.ends
+            .push(self.items.len().min(u32::MAX as usize) as u32);
+    }
+
+    /// Frees the unused room (the pass is done with these groups).
+    pub(crate) fn trim(&mut self) {
+        self.items.trim();
+        self.ends.shrink_to_fit();
+    }
+
+    /// Calls `f(group, items)` for every closed group, in order.
+    pub(crate) fn for_each_group(&self, mut f: impl FnMut(usize, &mut dyn Iterator<Item = T>)) {
+        let (mut all, mut start) = (self.items.iter(), 0);
+        for (g, &end) in self.ends.iter().enumerate() {
+            f(g, &mut all.by_ref().take(end as usize - start));
+            start = end as usize;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn groups_give_back_each_groups_items() {
+        let mut g = Groups::new();
+        let want: Vec<Vec<u32>> = vec![vec![1, 2], vec![], vec![3], vec![4, 5, 6]];
+        for items in &want {
+            for &x in items {
+                g.push(x);
+            }
+            g.close();
+        }
+        let mut got: Vec<Vec<u32>> = Vec::new();
+        g.for_each_group(|k, items| {
+            assert_eq!(k, got.len());
+            got.push(items.collect());
+        });
+        assert_eq!(got, want);
+        assert_eq!(g.len(), 6);
+    }
 
     #[test]
     fn blocks_keep_every_item_in_order_with_bounded_room() {

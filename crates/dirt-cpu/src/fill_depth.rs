@@ -12,7 +12,7 @@
 //! build keeps them ([`Fragments`], up to a budget) so that it does not clip
 //! every triangle twice.
 
-use crate::blocks::Blocks;
+use crate::blocks::Groups;
 use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF, f32_to_ordered};
 use dirt_math::{Triangle, ViewSet};
@@ -45,19 +45,12 @@ pub(crate) fn for_each_fragment(views: &ViewSet, t: &Triangle, mut f: impl FnMut
 }
 
 /// The fragments `fill_depth` found, kept for `fill_primitives`: per piece of
-/// [`PIECE`] triangles, `None` where the budget had run out (the next stage
-/// finds those again).
+/// [`PIECE`] triangles, one group per triangle of `(tile, zlo, zhi)` in
+/// [`for_each_fragment`]'s order, or `None` where the budget had run out (the
+/// next stage finds those again).
 #[derive(Debug, Default)]
 pub struct Fragments {
-    pub(crate) pieces: Vec<Option<Piece>>,
-}
-
-/// One piece's fragments: triangle `t` of the piece has
-/// `frags[ends[t-1]..ends[t]]` (`(tile, zlo, zhi)`, in [`for_each_fragment`]'s order).
-#[derive(Debug)]
-pub(crate) struct Piece {
-    pub(crate) ends: Vec<u32>,
-    pub(crate) frags: Blocks<(u32, f32, f32)>,
+    pub(crate) pieces: Vec<Option<Groups<(u32, f32, f32)>>>,
 }
 
 /// Depth bounds of every tile of every view, encoded.
@@ -82,7 +75,7 @@ pub fn fill_depth_keeping(
             ]
         })
         .collect();
-    // Tiles and fragment ends are kept as u32.
+    // Tiles and the groups' ends are kept as u32.
     let keep_max = if u32::try_from(total).is_ok() {
         keep_max.min(u32::MAX as usize - 1)
     } else {
@@ -98,33 +91,27 @@ pub fn fill_depth_keeping(
             // fill_primitives', whose lists cost at least as much).
             let room = keep_max.saturating_sub(kept.load(Ordering::Relaxed));
             let mut keep = room > 0;
-            let mut found = Piece {
-                ends: Vec::new(),
-                frags: Blocks::new(),
-            };
+            let mut found = Groups::new();
             for t in piece {
                 for_each_fragment(views, t, |tile, lo, hi| {
                     let e = &bounds[tile];
                     e[0].fetch_min(f32_to_ordered(lo), Ordering::Relaxed);
                     e[1].fetch_max(f32_to_ordered(hi), Ordering::Relaxed);
                     if keep {
-                        if found.frags.len() < room {
-                            found.frags.push((tile as u32, lo, hi));
+                        if found.len() < room {
+                            found.push((tile as u32, lo, hi));
                         } else {
                             keep = false;
-                            found.frags = Blocks::new();
+                            found = Groups::new();
                         }
                     }
                 });
-                if keep {
-                    // room < u32::MAX: the ends fit.
-                    found.ends.push(found.frags.len() as u32);
-                }
+                found.close();
             }
-            let n = found.frags.len();
+            let n = found.len();
             let before = kept.fetch_add(n, Ordering::Relaxed);
             (keep && before + n <= keep_max).then(|| {
-                found.frags.trim();
+                found.trim();
                 found
             })
         })

@@ -9,8 +9,8 @@
 //! arbitrary; the CPU sorts each list afterwards so its structure is reproducible.
 
 use crate::CpuError;
-use crate::blocks::Blocks;
-use crate::fill_depth::{Fragments, PIECE, Piece, for_each_fragment};
+use crate::blocks::Groups;
+use crate::fill_depth::{Fragments, PIECE, for_each_fragment};
 use dirt_core::IdLists;
 use dirt_math::bucket::bucket_range;
 use dirt_math::encode::ordered_to_f32;
@@ -50,18 +50,12 @@ fn for_each_list(
     });
 }
 
-/// Most list nodes the count pass keeps for the fill, in all pieces together
+/// Most list nodes the count pass keeps for the fill (per piece, the lists
+/// each triangle joins, in [`for_each_list`]'s order), in all pieces together
 /// (a piece past it keeps nothing, and the fill finds its lists again): the
 /// kept nodes cost as much memory as the id buffer they become, and past
 /// `u32::MAX` nodes the build is an error anyway.
 const KEEP_MAX: u64 = u32::MAX as u64 - 1;
-
-/// What the count pass found for one piece of triangles: `lists[ends[t-1]..ends[t]]`
-/// are the lists triangle `first + t` joins, in [`for_each_list`]'s order.
-struct Kept {
-    ends: Vec<u32>,
-    lists: Blocks<u32>,
-}
 
 /// Builds the lists from the triangles and the depth bounds of `fill_depth`.
 ///
@@ -109,39 +103,32 @@ fn fill_keeping(
     let kept_nodes = AtomicU64::new(0);
     let mut frags = fragments.pieces;
     frags.resize_with(tris.len().div_ceil(PIECE), || None);
-    let kept: Vec<Option<Kept>> = frags
+    let kept: Vec<Option<Groups<u32>>> = frags
         .into_par_iter()
         .zip(tris.par_chunks(PIECE))
         .map(|(frags, piece)| {
-            let mut ends = Vec::with_capacity(piece.len());
-            let mut lists = Blocks::new();
-            let add = |lists: &mut Blocks<u32>, k: usize| {
+            // Per triangle, the lists it joins, from its fragments: kept by
+            // fill_depth, or found again.
+            let mut lists = Groups::new();
+            let add = |lists: &mut Groups<u32>, k: usize| {
                 counts[k].fetch_add(1, Ordering::Relaxed);
                 if keep {
                     lists.push(k as u32);
                 }
             };
-            // Per triangle, its fragments: kept by fill_depth, or found again.
             match frags {
-                Some(Piece {
-                    ends: f_ends,
-                    frags,
-                }) => {
-                    let (mut all, mut start) = (frags.iter(), 0);
-                    for &end in &f_ends {
-                        for (tile, lo, hi) in all.by_ref().take(end as usize - start) {
-                            for_each_bucket(depth, buckets, (tile as usize, lo, hi), |k| {
-                                add(&mut lists, k)
-                            });
-                        }
-                        start = end as usize;
-                        ends.push(lists.len());
+                Some(frags) => frags.for_each_group(|_, fragments| {
+                    for (tile, lo, hi) in fragments {
+                        for_each_bucket(depth, buckets, (tile as usize, lo, hi), |k| {
+                            add(&mut lists, k)
+                        });
                     }
-                }
+                    lists.close();
+                }),
                 None => {
                     for t in piece {
                         for_each_list(views, depth, buckets, t, |k| add(&mut lists, k));
-                        ends.push(lists.len());
+                        lists.close();
                     }
                 }
             }
@@ -149,9 +136,7 @@ fn fill_keeping(
             let before = kept_nodes.fetch_add(n, Ordering::Relaxed);
             (keep && before + n <= keep_max).then(|| {
                 lists.trim();
-                // Fewer than KEEP_MAX nodes: the ends fit in u32.
-                let ends = ends.iter().map(|&e| e as u32).collect();
-                Kept { ends, lists }
+                lists
             })
         })
         .collect();
@@ -184,15 +169,11 @@ fn fill_keeping(
         .for_each(|(p, (found, piece))| {
             let first = p * PIECE;
             match found {
-                Some(Kept { ends, lists }) => {
-                    let (mut all, mut start) = (lists.iter(), 0);
-                    for (t, &end) in ends.iter().enumerate() {
-                        for k in all.by_ref().take(end as usize - start) {
-                            put(k as usize, first + t);
-                        }
-                        start = end as usize;
+                Some(lists) => lists.for_each_group(|t, ks| {
+                    for k in ks {
+                        put(k as usize, first + t);
                     }
-                }
+                }),
                 None => {
                     for (t, tri) in piece.iter().enumerate() {
                         for_each_list(views, depth, buckets, tri, |k| put(k, first + t));
@@ -264,7 +245,7 @@ mod tests {
                 "{name}: several pieces"
             );
             let (_, every) = crate::fill_depth::fill_depth_keeping(&views, &tris, usize::MAX);
-            let frags: usize = every.pieces.iter().flatten().map(|p| p.frags.len()).sum();
+            let frags: usize = every.pieces.iter().flatten().map(|p| p.len()).sum();
             assert!(every.pieces.iter().all(Option::is_some) && frags > 0);
             for keep_frags in [0, frags / 2, frags] {
                 for keep_nodes in [0, nodes / 3, nodes - 1, KEEP_MAX] {
