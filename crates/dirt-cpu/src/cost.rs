@@ -66,21 +66,22 @@ impl CostModel {
     /// Fitted by `examples/calibrate.rs` on cornell, foliage, layers and
     /// spheres over {cube, single} × resolution {32, 64, 128, 256} ×
     /// B {1, 4, 8, 16, 32} × {linear, Hi-Z} (320 traces, 160 builds), on a
-    /// 2-core x86-64 machine, after the build's clipping shortcuts and the
-    /// trace fast path. Median relative error of the fit on those
-    /// measurements: 20 % for trace time per ray, 36 % for build time.
-    /// Spearman's rank correlation between predicted and measured cost: 0.86
-    /// (trace per ray), 0.97 (build), and for whole frames 0.97 (5 000 rays),
-    /// 0.93 (100 000), 0.89 (1 000 000). Ranking is what [`auto`] and
-    /// [`choose`] need; the milliseconds are rough.
+    /// 2-core x86-64 machine, after the build stopped clipping a triangle to
+    /// its tiles more than once and the single view looks along the thinnest
+    /// axis. Median relative error of the fit on those measurements: 22 % for
+    /// trace time per ray, 36 % for build time. Spearman's rank correlation
+    /// between predicted and measured cost: 0.84 (trace per ray), 0.96
+    /// (build), and for whole frames 0.95 (5 000 rays), 0.91 (100 000), 0.87
+    /// (1 000 000). Ranking is what [`auto`] and [`choose`] need; the
+    /// milliseconds are rough.
     pub const CALIBRATED: CostModel = CostModel {
-        ns_per_node: 99.33,
-        ns_per_list: 3.037,
-        ns_per_triangle_view: 250.7,
-        ns_per_ray: 337.3,
-        ns_per_tile: 18.19,
-        ns_per_bucket: 17.33,
-        ns_per_test: 13.27,
+        ns_per_node: 24.53,
+        ns_per_list: 2.418,
+        ns_per_triangle_view: 85.41,
+        ns_per_ray: 291.9,
+        ns_per_tile: 10.99,
+        ns_per_bucket: 7.777,
+        ns_per_test: 4.204,
     };
 
     /// Predicted build time in milliseconds.
