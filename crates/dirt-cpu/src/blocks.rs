@@ -6,7 +6,10 @@
 //! holds as many items as the blocks before it (so few blocks), at least
 //! [`MIN`] and at most [`MAX`]: the slack stays below one block and under the
 //! items already kept, and nothing is copied. [`Groups`] adds where each
-//! triangle's items end: what a pass keeps for one piece of triangles.
+//! triangle's items end: what a pass keeps for one piece of triangles;
+//! [`Budget`] bounds what all pieces keep together.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Items in the first block.
 const MIN: usize = 256;
@@ -102,6 +105,40 @@ impl<T: Copy> Groups<T> {
             f(g, &mut all.by_ref().take(end as usize - start));
             start = end as usize;
         }
+    }
+}
+
+/// How many items the pieces of a pass may keep together. A piece is kept
+/// whole or not at all: one that does not fit what was left is dropped (the
+/// next pass finds its items again).
+#[derive(Debug)]
+pub(crate) struct Budget {
+    max: usize,
+    used: AtomicUsize,
+}
+
+impl Budget {
+    pub(crate) fn new(max: usize) -> Self {
+        Budget {
+            max,
+            used: AtomicUsize::new(0),
+        }
+    }
+
+    /// What is left of the budget now.
+    pub(crate) fn room(&self) -> usize {
+        self.max.saturating_sub(self.used.load(Ordering::Relaxed))
+    }
+
+    /// Charges a piece's `groups` to the budget: kept (trimmed) when `wanted`
+    /// and they fit in what was left, else dropped.
+    pub(crate) fn settle<T: Copy>(&self, mut groups: Groups<T>, wanted: bool) -> Option<Groups<T>> {
+        let n = groups.len();
+        let before = self.used.fetch_add(n, Ordering::Relaxed);
+        (wanted && before.saturating_add(n) <= self.max).then(|| {
+            groups.trim();
+            groups
+        })
     }
 }
 

@@ -12,12 +12,12 @@
 //! build keeps them ([`Fragments`], up to a budget) so that it does not clip
 //! every triangle twice.
 
-use crate::blocks::Groups;
+use crate::blocks::{Budget, Groups};
 use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF, f32_to_ordered};
 use dirt_math::{Triangle, ViewSet};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Triangles per piece: the unit in which the build keeps what one pass
 /// found for the next, and of the parallel loops over triangles.
@@ -81,7 +81,7 @@ pub fn fill_depth_keeping(
     } else {
         0
     };
-    let kept = AtomicUsize::new(0);
+    let budget = Budget::new(keep_max);
     let pieces = tris
         .par_chunks(PIECE)
         .map(|piece| {
@@ -89,7 +89,7 @@ pub fn fill_depth_keeping(
             // nothing (and frees what it took at once: with each piece in
             // flight bounded by the budget, this stage's peak stays below
             // fill_primitives', whose lists cost at least as much).
-            let room = keep_max.saturating_sub(kept.load(Ordering::Relaxed));
+            let room = budget.room();
             let mut keep = room > 0;
             let mut found = Groups::new();
             for t in piece {
@@ -106,14 +106,11 @@ pub fn fill_depth_keeping(
                         }
                     }
                 });
-                found.close();
+                if keep {
+                    found.close();
+                }
             }
-            let n = found.len();
-            let before = kept.fetch_add(n, Ordering::Relaxed);
-            (keep && before + n <= keep_max).then(|| {
-                found.trim();
-                found
-            })
+            budget.settle(found, keep)
         })
         .collect();
     let depth = bounds

@@ -9,14 +9,14 @@
 //! arbitrary; the CPU sorts each list afterwards so its structure is reproducible.
 
 use crate::CpuError;
-use crate::blocks::Groups;
+use crate::blocks::{Budget, Groups};
 use crate::fill_depth::{Fragments, PIECE, for_each_fragment};
 use dirt_core::IdLists;
 use dirt_math::bucket::bucket_range;
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::{Triangle, ViewSet};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Calls `f(list_index)` for every bucket of the depth bounds `depth[tile]`
 /// that a triangle's fragment `[lo, hi]` in `tile` overlaps.
@@ -55,7 +55,7 @@ fn for_each_list(
 /// (a piece past it keeps nothing, and the fill finds its lists again): the
 /// kept nodes cost as much memory as the id buffer they become, and past
 /// `u32::MAX` nodes the build is an error anyway.
-const KEEP_MAX: u64 = u32::MAX as u64 - 1;
+const KEEP_MAX: usize = u32::MAX as usize - 1;
 
 /// Builds the lists from the triangles and the depth bounds of `fill_depth`.
 ///
@@ -92,7 +92,7 @@ fn fill_keeping(
     buckets: u32,
     tris: &[Triangle],
     fragments: Fragments,
-    keep_max: u64,
+    keep_max: usize,
 ) -> Result<IdLists, CpuError> {
     let n_lists = depth.len() * buckets as usize;
     // Count. The total comes from the prefix sum, not from one counter every
@@ -100,7 +100,7 @@ fn fill_keeping(
     let counts: Vec<AtomicU32> = (0..n_lists).map(|_| AtomicU32::new(0)).collect();
     // List indices are kept as u32; more lists than that keep nothing.
     let keep = u32::try_from(n_lists).is_ok();
-    let kept_nodes = AtomicU64::new(0);
+    let budget = Budget::new(keep_max);
     let mut frags = fragments.pieces;
     frags.resize_with(tris.len().div_ceil(PIECE), || None);
     let kept: Vec<Option<Groups<u32>>> = frags
@@ -132,12 +132,7 @@ fn fill_keeping(
                     }
                 }
             }
-            let n = lists.len() as u64;
-            let before = kept_nodes.fetch_add(n, Ordering::Relaxed);
-            (keep && before + n <= keep_max).then(|| {
-                lists.trim();
-                lists
-            })
+            budget.settle(lists, keep)
         })
         .collect();
     // Exclusive prefix sum, in 64 bits: more than u32::MAX nodes is an error
@@ -239,7 +234,7 @@ mod tests {
             let depth = crate::fill_depth::fill_depth(&views, &tris);
             let b = params.buckets;
             let all = fill_primitives(&views, &depth, b, &tris).expect("fill");
-            let nodes = all.ids.len() as u64;
+            let nodes = all.ids.len();
             assert!(
                 nodes > 0 && tris.len() > 2 * PIECE,
                 "{name}: several pieces"
