@@ -63,7 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let tris = &scene.triangles;
         let sample = rays(&scene.bounds(), 20_000, 7);
         for views in [ViewsKind::Cube, ViewsKind::Single] {
-            for resolution in [8, 16, 32, 64, 128, 256] {
+            for resolution in [32, 64, 128, 256] {
                 for buckets in [1, 4, 8, 16, 32] {
                     let tile = 1;
                     let p = AdsParams {

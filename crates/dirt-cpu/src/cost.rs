@@ -64,24 +64,27 @@ impl Counts {
 
 impl CostModel {
     /// Fitted by `examples/calibrate.rs` on cornell, foliage, layers and
-    /// spheres over {cube, single} × resolution {8, 16, 32, 64, 128, 256} ×
-    /// B {1, 4, 8, 16, 32} × {linear, Hi-Z} (480 traces, 240 builds), on a
+    /// spheres over {cube, single} × resolution {32, 64, 128, 256} ×
+    /// B {1, 4, 8, 16, 32} × {linear, Hi-Z} (320 traces, 160 builds), on a
     /// 2-core x86-64 machine, after the build stopped clipping a triangle to
     /// its tiles more than once and the single view looks along the thinnest
-    /// axis. Median relative error of the fit on those measurements: 19 % for
-    /// trace time per ray, 43 % for build time. Spearman's rank correlation
-    /// between predicted and measured cost: 0.87 (trace per ray), 0.95
-    /// (build), and for whole frames 0.94 (5 000 rays), 0.91 (100 000), 0.88
+    /// axis. Median relative error of the fit on those measurements: 22 % for
+    /// trace time per ray, 36 % for build time. Spearman's rank correlation
+    /// between predicted and measured cost: 0.84 (trace per ray), 0.96
+    /// (build), and for whole frames 0.95 (5 000 rays), 0.91 (100 000), 0.87
     /// (1 000 000). Ranking is what [`auto`] and [`choose`] need; the
-    /// milliseconds are rough.
+    /// milliseconds are rough. The candidates at resolution 8 and 16 are
+    /// ranked with these constants too: a fit that included them (480
+    /// traces) ranked no better (0.87 / 0.95 / 0.94, 0.91, 0.88) and chose a
+    /// slower structure for the deforming grid's frames of 100 000 rays.
     pub const CALIBRATED: CostModel = CostModel {
-        ns_per_node: 27.09,
-        ns_per_list: 3.155,
-        ns_per_triangle_view: 87.51,
-        ns_per_ray: 294.3,
-        ns_per_tile: 15.31,
-        ns_per_bucket: 8.550,
-        ns_per_test: 5.437,
+        ns_per_node: 24.53,
+        ns_per_list: 2.418,
+        ns_per_triangle_view: 85.41,
+        ns_per_ray: 291.9,
+        ns_per_tile: 10.99,
+        ns_per_bucket: 7.777,
+        ns_per_test: 4.204,
     };
 
     /// Predicted build time in milliseconds.
