@@ -5,7 +5,7 @@ use std::error::Error;
 
 fn cpu_example() -> Result<(), Box<dyn Error>> {
     // README BEGIN
-    use dirt_core::{Tracer, Traversal};
+    use dirt_core::Tracer;
     use dirt_cpu::{DirtCpu, brute_force::Brute};
     use dirt_math::{Ray, Vec3};
 
@@ -18,8 +18,9 @@ fn cpu_example() -> Result<(), Box<dyn Error>> {
     )];
 
     // The cost model chooses the parameters for frames of 100 000 rays at the first
-    // build (DirtCpu::new(AdsParams { .. }, traversal) fixes them instead).
-    let mut dirt = DirtCpu::auto(Traversal::HiZ, 100_000);
+    // build, and the faster traversal (None; Some(Traversal::HiZ) fixes it), timed on a
+    // sample; DirtCpu::new(AdsParams { .. }, traversal) fixes every parameter instead.
+    let mut dirt = DirtCpu::auto(None, 100_000);
     dirt.build(&scene.triangles)?; // rebuild every frame for a moving scene
     let hits = dirt.trace(&rays)?;
     let truth = Brute::new(&scene.triangles).trace(&rays)?;

@@ -1,7 +1,7 @@
 //! DIRT on the CPU as a [`Tracer`]: [`DirtCpu`] owns the structure and a copy
 //! of the triangles it was built over.
 
-use crate::cost::{self, AutoChoice, CostModel};
+use crate::cost::{self, AutoChoice, CostModel, TraversalChoice};
 use crate::{Ads, CpuError, trace_into};
 use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
@@ -11,6 +11,10 @@ use web_time::Instant;
 
 /// Rays in the sample [`DirtCpu::auto`] measures candidates with.
 pub const AUTO_SAMPLE: usize = 512;
+
+/// Rays in the sample [`DirtCpu::auto`] times the two traversals on, when
+/// none is given: enough for milliseconds on a small scene.
+pub const TRAVERSAL_SAMPLE: usize = 4000;
 
 /// DIRT on the CPU: [`Ads::build`] and [`crate::trace`] behind [`Tracer`].
 #[derive(Debug)]
@@ -23,6 +27,10 @@ pub struct DirtCpu {
     auto: Option<u64>,
     /// The last choice and the triangle count it was made for.
     choice: Option<(usize, AutoChoice)>,
+    /// With [`DirtCpu::auto`] and no traversal given: the traversal is timed
+    /// at each choice ([`cost::faster_traversal`]); the last timing.
+    measure_traversal: bool,
+    traversal_choice: Option<TraversalChoice>,
 }
 
 impl DirtCpu {
@@ -36,6 +44,8 @@ impl DirtCpu {
             tris: Vec::new(),
             auto: None,
             choice: None,
+            measure_traversal: false,
+            traversal_choice: None,
         }
     }
 
@@ -46,12 +56,22 @@ impl DirtCpu {
     /// same (a deforming mesh keeps its choice; another scene gets a new one).
     /// Its time is the build's first stage, `choose`; that build then keeps
     /// the winning candidate's structure, built while choosing, so its other
-    /// stages are absent.
-    pub fn auto(traversal: Traversal, rays_per_frame: u64) -> Self {
+    /// stages are absent. With `traversal` `None`, the faster traversal
+    /// through the chosen structure is measured too, on [`TRAVERSAL_SAMPLE`]
+    /// rays of the same kind ([`cost::faster_traversal`]; inside `choose`);
+    /// both give the same hits, so only time depends on that measurement.
+    pub fn auto(traversal: Option<Traversal>, rays_per_frame: u64) -> Self {
         Self {
             auto: Some(rays_per_frame),
-            ..Self::new(AdsParams::default(), traversal)
+            measure_traversal: traversal.is_none(),
+            ..Self::new(AdsParams::default(), traversal.unwrap_or(Traversal::HiZ))
         }
+    }
+
+    /// The timing behind the traversal of [`DirtCpu::auto`] without a
+    /// traversal given (after a build).
+    pub fn traversal_choice(&self) -> Option<&TraversalChoice> {
+        self.traversal_choice.as_ref()
     }
 
     /// The cost model's last choice, with what it ranked and skipped
@@ -78,6 +98,8 @@ impl DirtCpu {
             tris: tris.to_vec(),
             auto: None,
             choice: None,
+            measure_traversal: false,
+            traversal_choice: None,
         }
     }
 
@@ -138,11 +160,27 @@ impl Tracer for DirtCpu {
             self.params = choice.best.params;
             let built = choice.best_ads.take();
             self.choice = Some((tris.len(), choice));
-            stages.push(("choose", start.elapsed()));
+            let mut choose = start.elapsed();
             // The winner was built while choosing, over these very triangles.
-            if let Some(ads) = built {
-                return Ok(self.keep(ads, tris, stages));
+            let (ads, built_stages) = match built {
+                Some(ads) => (ads, Vec::new()),
+                None => {
+                    let ads = Ads::build(tris, &self.params)?;
+                    let built_stages = ads.timings.stages();
+                    (ads, built_stages)
+                }
+            };
+            if self.measure_traversal {
+                let start = Instant::now();
+                let sample = cost::sample_rays(tris, TRAVERSAL_SAMPLE, 2);
+                let timed = cost::faster_traversal(&ads, tris, &sample);
+                self.traversal = timed.traversal;
+                self.traversal_choice = Some(timed);
+                choose += start.elapsed();
             }
+            stages.push(("choose", choose));
+            stages.extend(built_stages);
+            return Ok(self.keep(ads, tris, stages));
         }
         let ads = Ads::build(tris, &self.params)?;
         stages.extend(ads.timings.stages());

@@ -91,13 +91,13 @@ fn auto_chooses_once_per_triangle_count_and_stays_exact() {
     let mut rng = Rng(11);
     let tris = soup(300, &mut rng);
     let rs = rays(2000, &tris, &mut rng);
-    let mut t = DirtCpu::auto(Traversal::HiZ, 50_000);
+    let mut t = DirtCpu::auto(Some(Traversal::HiZ), 50_000);
     let first = t.build(&tris).expect("build");
     assert_eq!(first.stages.first().map(|s| s.0), Some("choose"));
     let choice = t.choice().expect("a choice after the build");
     let chosen = choice.best.params;
     assert_eq!(t.params, chosen);
-    assert_eq!(choice.ranked.len() + choice.skipped, 24);
+    assert_eq!(choice.ranked.len() + choice.skipped, 36);
     // The winner built while choosing is the structure kept: no second build.
     assert_eq!(first.stages.len(), 1, "{:?}", first.stages);
     assert!(choice.best_ads.is_none(), "handed over to the tracer");
@@ -128,4 +128,41 @@ fn auto_chooses_once_per_triangle_count_and_stays_exact() {
     // An empty scene builds, and every ray misses.
     t.build(&[]).expect("an empty scene builds");
     assert!(t.trace(&rs).expect("trace").iter().all(|h| !h.is_hit()));
+}
+
+// DirtCpu::auto without a traversal: the faster one is timed at the choice
+// and kept with it; exact either way.
+#[test]
+fn auto_without_a_traversal_times_both_and_stays_exact() {
+    use dirt_core::Tracer;
+    use dirt_cpu::DirtCpu;
+    use dirt_cpu::brute_force::Brute;
+    let mut rng = Rng(12);
+    let tris = soup(300, &mut rng);
+    let rs = rays(2000, &tris, &mut rng);
+    let mut t = DirtCpu::auto(None, 50_000);
+    assert!(t.traversal_choice().is_none(), "timed at the first build");
+    let first = t.build(&tris).expect("build");
+    assert_eq!(first.stages.first().map(|s| s.0), Some("choose"));
+    let timed = *t.traversal_choice().expect("timed at the choice");
+    assert_eq!(timed.rays, dirt_cpu::tracer::TRAVERSAL_SAMPLE);
+    assert!(timed.linear > std::time::Duration::ZERO && timed.hiz > std::time::Duration::ZERO);
+    assert_eq!(t.traversal, timed.traversal);
+    assert!(
+        t.name().contains(&timed.traversal.to_string()),
+        "{}",
+        t.name()
+    );
+    assert_eq!(
+        t.trace(&rs).expect("trace"),
+        Brute::new(&tris).trace(&rs).expect("brute")
+    );
+    // Same count: neither choice is made again.
+    t.build(&tris).expect("build");
+    assert_eq!(t.traversal_choice(), Some(&timed));
+    // With a traversal given, nothing is timed.
+    let mut fixed = DirtCpu::auto(Some(Traversal::Linear), 50_000);
+    fixed.build(&tris).expect("build");
+    assert!(fixed.traversal_choice().is_none());
+    assert_eq!(fixed.traversal, Traversal::Linear);
 }

@@ -222,7 +222,7 @@ fn run_with(
         skipped: false,
     };
     let mut entries = vec![
-        dirt("dirt-cpu", DirtCpu::auto(Traversal::HiZ, ray_count as u64)),
+        dirt("dirt-cpu", DirtCpu::auto(None, ray_count as u64)),
         dirt(FIXED, DirtCpu::new(AdsParams::default(), Traversal::HiZ)),
     ];
     for peer in peers {

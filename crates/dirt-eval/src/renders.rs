@@ -14,7 +14,7 @@
 
 use std::time::Instant;
 
-use dirt_core::{Tracer, Traversal};
+use dirt_core::Tracer;
 use dirt_cpu::DirtCpu;
 use dirt_cpu::screen_space::ScreenSpace;
 use dirt_render::output::Image;
@@ -168,12 +168,9 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
                 // spp (the plot draws a line per tracer); the choice, which may
                 // differ per spp, is in the notes' tracer names.
                 0 => {
-                    let mut dirt = DirtCpu::auto(Traversal::HiZ, run_settings.max_rays());
+                    let mut dirt = DirtCpu::auto(None, run_settings.max_rays());
                     dirt.build(&scene.triangles).map_err(render_err)?;
-                    (
-                        "dirt-cpu (hiz, the cost model's choice)".into(),
-                        Box::new(dirt),
-                    )
+                    ("dirt-cpu (the cost model's choice)".into(), Box::new(dirt))
                 }
                 1 => (
                     "obvhs bvh2 (renderer reference)".into(),
