@@ -51,6 +51,10 @@
 //!   origin); the results go back to input order.
 //! - Tile boundary slopes ([`View::boundary`]) come from a table made once per
 //!   `trace` call.
+//! - A ray's set-up in every view (its view-space ray and its interval in the
+//!   view's frustum) is computed for all views at once, one lane a view
+//!   ([`ViewLanes`]), from the views' constants laid side by side once per
+//!   `trace` call.
 //!
 //! [`HiZCell::clip`]: dirt_math::dda::HiZCell::clip
 
@@ -58,11 +62,12 @@ use crate::Ads;
 use crate::intersect_lanes::{LANES, intersect_closest_lanes};
 use dirt_core::{RayStats, Traversal};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
-use dirt_math::clip::{HalfSpace, Interval, ray_depth, view_frustum};
+use dirt_math::clip::{HalfSpace, Interval, ray_depth};
 use dirt_math::dda::{child_order, dilation, hiz_width};
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::num::{floor_index, fmax, fmin};
 use dirt_math::triangle::{RayShear, intersect_closest};
+use dirt_math::view::EPS_RAY_REL;
 use dirt_math::{Hit, Ray, Triangle, View, ViewRay};
 use std::array::from_fn;
 
@@ -88,6 +93,8 @@ pub(crate) struct Scene<'a> {
     buckets: u32,
     /// Per view, the slope of every tile boundary ([`View::boundary`]).
     slopes: Vec<Vec<f32>>,
+    /// The views' constants as lanes, for [`ViewLanes::enter`].
+    lanes: ViewLanes,
 }
 
 impl<'a> Scene<'a> {
@@ -115,7 +122,152 @@ impl<'a> Scene<'a> {
             levels: levels as u32,
             buckets: ads.params.buckets,
             slopes,
+            lanes: ViewLanes::new(views),
         })
+    }
+}
+
+/// Lanes of the per-view set-up: one a view, padded past the set's views.
+const VIEW_LANES: usize = 8;
+
+type Lanes = [f32; VIEW_LANES];
+
+/// The views' constants side by side, so that a ray's set-up in every view —
+/// [`View::ray`] and [`clip_ray_to_view`] — is computed as lanes of one
+/// vector each (module docs).
+///
+/// [`clip_ray_to_view`]: dirt_math::clip::clip_ray_to_view Lanes past the set's views repeat its first view.
+struct ViewLanes {
+    n: usize,
+    apex: [Lanes; 3],
+    /// `axes[r][c]`: component `c` of the view's right (`r = 0`), up, forward.
+    axes: [[Lanes; 3]; 3],
+    tan: Lanes,
+    near: Lanes,
+    far: Lanes,
+    scale: Lanes,
+    has_content: [bool; VIEW_LANES],
+}
+
+impl ViewLanes {
+    fn new(views: &[View]) -> Self {
+        let n = views.len().min(VIEW_LANES);
+        let view = |k: usize| &views[if k < n { k } else { 0 }];
+        let lanes = |f: &dyn Fn(&View) -> f32| -> Lanes { from_fn(|k| f(view(k))) };
+        let axis = |r: usize, v: &View| [v.right, v.up, v.forward][r];
+        ViewLanes {
+            n,
+            apex: from_fn(|c| lanes(&|v| v.apex[c])),
+            axes: from_fn(|r| from_fn(|c| lanes(&|v| axis(r, v)[c]))),
+            tan: lanes(&|v| v.tan),
+            near: lanes(&|v| v.near),
+            far: lanes(&|v| v.far),
+            scale: lanes(&|v| v.scale),
+            has_content: from_fn(|k| k < n && view(k).has_content),
+        }
+    }
+
+    /// For every view, [`View::ray`] and, for views with content,
+    /// [`clip_ray_to_view`](dirt_math::clip::clip_ray_to_view) from `tmin` to
+    /// `tmax` (its six half-spaces as cuts, applied in its order): the same
+    /// operations on the same operands, as lanes.
+    #[inline]
+    fn enter(
+        &self,
+        ray: &Ray,
+    ) -> (
+        [ViewRay; MAX_VIEWS],
+        [Interval; MAX_VIEWS],
+        [Option<usize>; MAX_VIEWS],
+    ) {
+        let (org, dir) = (ray.origin(), ray.dir());
+        let q: [Lanes; 3] = from_fn(|c| from_fn(|k| org[c] - self.apex[c][k]));
+        let dw = [dir.x, dir.y, dir.z];
+        // dirt_math::view::dot3 of each axis, in its order.
+        let ax = &self.axes;
+        let o: [Lanes; 3] = from_fn(|r| {
+            from_fn(|k| q[0][k] * ax[r][0][k] + q[1][k] * ax[r][1][k] + q[2][k] * ax[r][2][k])
+        });
+        let d: [Lanes; 3] = from_fn(|r| {
+            from_fn(|k| dw[0] * ax[r][0][k] + dw[1] * ax[r][1][k] + dw[2] * ax[r][2][k])
+        });
+        let eps: Lanes = from_fn(|k| {
+            let m = fmax(fmax(o[0][k].abs(), o[1][k].abs()), o[2][k].abs());
+            EPS_RAY_REL * (m + 2.0 * self.scale[k])
+        });
+        // dirt_math::clip::view_frustum: Lo x (s = -tan), Hi x (tan), Lo y, Hi y, Near, Far.
+        let neg: Lanes = from_fn(|k| -self.tan[k]);
+        let tan = self.tan;
+        let parts: [(Lanes, Lanes); 6] = [
+            (
+                from_fn(|k| o[0][k] - neg[k] * o[2][k] + eps[k]),
+                from_fn(|k| d[0][k] - neg[k] * d[2][k]),
+            ),
+            (
+                from_fn(|k| tan[k] * o[2][k] - o[0][k] + eps[k]),
+                from_fn(|k| tan[k] * d[2][k] - d[0][k]),
+            ),
+            (
+                from_fn(|k| o[1][k] - neg[k] * o[2][k] + eps[k]),
+                from_fn(|k| d[1][k] - neg[k] * d[2][k]),
+            ),
+            (
+                from_fn(|k| tan[k] * o[2][k] - o[1][k] + eps[k]),
+                from_fn(|k| tan[k] * d[2][k] - d[1][k]),
+            ),
+            (from_fn(|k| o[2][k] - self.near[k] + eps[k]), d[2]),
+            (
+                from_fn(|k| self.far[k] - o[2][k] + eps[k]),
+                from_fn(|k| -d[2][k]),
+            ),
+        ];
+        let mut cuts = [([0.0; VIEW_LANES], [0.0; VIEW_LANES]); 6];
+        for (cut, (f0, f1)) in cuts.iter_mut().zip(&parts) {
+            let t: Lanes = from_fn(|k| -f0[k] / f1[k]);
+            *cut = (
+                from_fn(|k| cut_lo(f0[k], f1[k], t[k])),
+                from_fn(|k| cut_hi(f0[k], f1[k], t[k])),
+            );
+        }
+        let mut vrs = [ViewRay {
+            o: [0.0; 3],
+            d: [0.0; 3],
+            eps: 0.0,
+        }; MAX_VIEWS];
+        let mut ivs = [Interval::EMPTY; MAX_VIEWS];
+        let mut exits = [None; MAX_VIEWS];
+        for f in 0..self.n.min(MAX_VIEWS) {
+            vrs[f] = ViewRay {
+                o: [o[0][f], o[1][f], o[2][f]],
+                d: [d[0][f], d[1][f], d[2][f]],
+                eps: eps[f],
+            };
+            if !self.has_content[f] {
+                continue;
+            }
+            // The ray leaves through the last half-space that lowered `t1`
+            // (Interval::clip's "moved t1"; one that empties the interval
+            // also counts, but then there is no exit).
+            let mut iv = Interval {
+                t0: ray.tmin,
+                t1: ray.tmax,
+            };
+            let mut exit = None;
+            for (k, (lo, hi)) in cuts.iter().enumerate() {
+                let c = Cut {
+                    lo: lo[f],
+                    hi: hi[f],
+                };
+                if c.hi < iv.t1 {
+                    exit = if k < 4 { Some(k) } else { None };
+                }
+                c.apply(&mut iv);
+            }
+            if !iv.is_empty() {
+                (ivs[f], exits[f]) = (iv, exit);
+            }
+        }
+        (vrs, ivs, exits)
     }
 }
 
@@ -247,53 +399,6 @@ fn tile_xy2(v: &View, vr: &ViewRay, ta: f32, tb: f32) -> [f32; 4] {
     let tt = [ta, ta, tb, tb];
     let zz = [za, za, zb, zb];
     from_fn(|k| ((oo[k] + tt[k] * dd[k]) / zz[k] + v.tan) / v.step)
-}
-
-/// [`clip_ray_to_view`] with the six cuts of [`view_frustum`], applied in
-/// its order. The ray leaves through the last half-space that lowered `t1`
-/// (`hi < t1` is [`Interval::clip`]'s "moved `t1`"; a cut that empties the
-/// interval also counts, but then the interval is empty and there is no exit).
-///
-/// [`clip_ray_to_view`]: dirt_math::clip::clip_ray_to_view
-#[inline]
-fn clip_to_view(v: &View, vr: &ViewRay, tmin: f32, tmax: f32) -> (Interval, Option<usize>) {
-    let mut iv = Interval { t0: tmin, t1: tmax };
-    let mut exit = None;
-    let h = view_frustum(v);
-    let [x0, x1, y0, y1] = match (h[0], h[1], h[2], h[3]) {
-        (
-            HalfSpace::Lo { s: a, .. },
-            HalfSpace::Hi { s: b, .. },
-            HalfSpace::Lo { s: c, .. },
-            HalfSpace::Hi { s: d, .. },
-        ) => {
-            let (o, dir) = (vr.o, vr.d);
-            let (lo, hi) = cut_lanes(
-                [o[0], b * o[2], o[1], d * o[2]],
-                [a * o[2], o[0], c * o[2], o[1]],
-                [dir[0], b * dir[2], dir[1], d * dir[2]],
-                [a * dir[2], dir[0], c * dir[2], dir[1]],
-                vr.eps,
-            );
-            from_fn(|k| Cut {
-                lo: lo[k],
-                hi: hi[k],
-            })
-        }
-        _ => from_fn(|k| Cut::of(&h[k], vr)),
-    };
-    let cuts = [x0, x1, y0, y1, Cut::of(&h[4], vr), Cut::of(&h[5], vr)];
-    for (k, c) in cuts.into_iter().enumerate() {
-        if c.hi < iv.t1 {
-            exit = if k < 4 { Some(k) } else { None };
-        }
-        c.apply(&mut iv);
-    }
-    if iv.is_empty() {
-        (Interval::EMPTY, None)
-    } else {
-        (iv, exit)
-    }
 }
 
 /// `dirt_math::dda::index_range`, inlined.
@@ -453,22 +558,8 @@ pub(crate) fn trace_ray<const STATS: bool>(
     if ray.validate().is_err() {
         return (Hit::MISS, RayStats::default());
     }
-    let views = sc.views;
-    let n = views.len();
-    let mut vrs = [ViewRay {
-        o: [0.0; 3],
-        d: [0.0; 3],
-        eps: 0.0,
-    }; MAX_VIEWS];
-    let mut ivs = [Interval::EMPTY; MAX_VIEWS];
-    let mut exits = [None; MAX_VIEWS];
-    for (f, v) in views.iter().enumerate() {
-        let vr = v.ray(ray);
-        if v.has_content {
-            (ivs[f], exits[f]) = clip_to_view(v, &vr, ray.tmin, ray.tmax);
-        }
-        vrs[f] = vr;
-    }
+    let n = sc.views.len();
+    let (vrs, ivs, exits) = sc.lanes.enter(ray);
     if !STATS {
         scratch.next_ray();
     }
@@ -928,7 +1019,7 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(2000))]
 
-        // The cut form of the view clip, and the cut form of a tile's clip
+        // The views' set-up as lanes, and the cut form of a tile's clip
         // (Hi-Z cell, band, tile), give the plain functions' bits.
         #[test]
         fn cuts_clip_like_the_plain_functions(
@@ -942,12 +1033,24 @@ mod tests {
             } else {
                 ViewSet::cube(Vec3::new(0.1, -0.2, 0.05), &bounds, tiles)
             };
-            let v = &vs.views[face % vs.views.len()];
             let ray = Ray::new(o, d, tmin, tmax);
+            prop_assume!(ray.validate().is_ok());
+            // Every view's set-up as lanes: View::ray and clip_ray_to_view's bits.
+            let (vrs, ivs, exits) = ViewLanes::new(&vs.views).enter(&ray);
+            for (f, v) in vs.views.iter().enumerate() {
+                let vr = v.ray(&ray);
+                let bits = |r: &ViewRay| (r.o.map(f32::to_bits), r.d.map(f32::to_bits), r.eps.to_bits());
+                prop_assert_eq!(bits(&vrs[f]), bits(&vr));
+                let (a, ea) = if v.has_content {
+                    clip_ray_to_view(v, &vr, tmin, tmax)
+                } else {
+                    (Interval::EMPTY, None)
+                };
+                prop_assert_eq!((a.t0.to_bits(), a.t1.to_bits(), ea), (ivs[f].t0.to_bits(), ivs[f].t1.to_bits(), exits[f]));
+            }
+            let v = &vs.views[face % vs.views.len()];
             let vr = v.ray(&ray);
-            let (a, ea) = clip_ray_to_view(v, &vr, tmin, tmax);
-            let (b, eb) = clip_to_view(v, &vr, tmin, tmax);
-            prop_assert_eq!((a.t0.to_bits(), a.t1.to_bits(), ea), (b.t0.to_bits(), b.t1.to_bits(), eb));
+            let (a, _) = clip_ray_to_view(v, &vr, tmin, tmax);
             let (k, l) = (k.min(tiles), l.min(tiles));
             let cell = dirt_math::clip::block_frustum(v, k.min(l), k.max(l), l.min(k), k.max(l));
             let mut plain = a;
