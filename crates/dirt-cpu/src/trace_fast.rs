@@ -45,7 +45,9 @@
 //! - A bucket's triangles are tested [`LANES`] at a time
 //!   ([`intersect_closest_lanes`]: the edge functions of several triangles
 //!   side by side, each lane the scalar test's bits); the closest hit of a
-//!   list does not depend on the order its triangles are tested in.
+//!   list does not depend on the order its triangles are tested in. Two or
+//!   three left over are one more group, a triangle repeated in the spare
+//!   lanes (testing a candidate twice changes no hit).
 //! - Batches of [`ORDER_MIN_RAYS`] rays or more are traced in a coherent
 //!   order ([`coherent_order`]: direction face, then Morton code of the
 //!   origin); the results go back to input order.
@@ -929,7 +931,14 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
                     n = 0;
                 }
             }
-            for &id in &lanes[..n] {
+            if n >= 2 {
+                // Two or three left: one more group, its last lanes repeating
+                // a triangle (the same candidate twice changes no hit).
+                let last = lanes[n - 1];
+                lanes[n..].fill(last);
+                intersect_closest_lanes(self.ray, &self.sh, sc.tris, lanes, &mut best);
+            } else if n == 1 {
+                let id = lanes[0];
                 intersect_closest(self.ray, &self.sh, &sc.tris[id as usize], id, &mut best);
             }
         }
