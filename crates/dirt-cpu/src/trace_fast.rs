@@ -136,9 +136,10 @@ type Lanes = [f32; VIEW_LANES];
 
 /// The views' constants side by side, so that a ray's set-up in every view —
 /// [`View::ray`] and [`clip_ray_to_view`] — is computed as lanes of one
-/// vector each (module docs).
+/// vector each (module docs). Lanes past the set's views repeat its first
+/// view.
 ///
-/// [`clip_ray_to_view`]: dirt_math::clip::clip_ray_to_view Lanes past the set's views repeat its first view.
+/// [`clip_ray_to_view`]: dirt_math::clip::clip_ray_to_view
 struct ViewLanes {
     n: usize,
     apex: [Lanes; 3],
@@ -153,7 +154,8 @@ struct ViewLanes {
 
 impl ViewLanes {
     fn new(views: &[View]) -> Self {
-        let n = views.len().min(VIEW_LANES);
+        // Scene::new takes at most MAX_VIEWS views.
+        let n = views.len().min(MAX_VIEWS);
         let view = |k: usize| &views[if k < n { k } else { 0 }];
         let lanes = |f: &dyn Fn(&View) -> f32| -> Lanes { from_fn(|k| f(view(k))) };
         let axis = |r: usize, v: &View| [v.right, v.up, v.forward][r];
@@ -223,13 +225,10 @@ impl ViewLanes {
                 from_fn(|k| -d[2][k]),
             ),
         ];
+        // A loop, not `parts.map`: the map's closure was left out of line.
         let mut cuts = [([0.0; VIEW_LANES], [0.0; VIEW_LANES]); 6];
         for (cut, (f0, f1)) in cuts.iter_mut().zip(&parts) {
-            let t: Lanes = from_fn(|k| -f0[k] / f1[k]);
-            *cut = (
-                from_fn(|k| cut_lo(f0[k], f1[k], t[k])),
-                from_fn(|k| cut_hi(f0[k], f1[k], t[k])),
-            );
+            *cut = cuts_of(*f0, *f1);
         }
         let mut vrs = [ViewRay {
             o: [0.0; 3],
@@ -238,7 +237,7 @@ impl ViewLanes {
         }; MAX_VIEWS];
         let mut ivs = [Interval::EMPTY; MAX_VIEWS];
         let mut exits = [None; MAX_VIEWS];
-        for f in 0..self.n.min(MAX_VIEWS) {
+        for f in 0..self.n {
             vrs[f] = ViewRay {
                 o: [o[0][f], o[1][f], o[2][f]],
                 d: [d[0][f], d[1][f], d[2][f]],
@@ -380,8 +379,13 @@ fn cut_lanes<const N: usize>(
     e: [f32; N],
     eps: f32,
 ) -> ([f32; N], [f32; N]) {
-    let f0: [f32; N] = from_fn(|k| a[k] - b[k] + eps);
-    let f1: [f32; N] = from_fn(|k| c[k] - e[k]);
+    cuts_of(from_fn(|k| a[k] - b[k] + eps), from_fn(|k| c[k] - e[k]))
+}
+
+/// The cuts `(lo, hi)` of `N` half-spaces whose values along the ray are
+/// `f0 + t·f1`, as lanes ([`Cut::from_parts`] on each).
+#[inline(always)]
+fn cuts_of<const N: usize>(f0: [f32; N], f1: [f32; N]) -> ([f32; N], [f32; N]) {
     let t: [f32; N] = from_fn(|k| -f0[k] / f1[k]);
     (
         from_fn(|k| cut_lo(f0[k], f1[k], t[k])),

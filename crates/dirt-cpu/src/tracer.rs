@@ -91,15 +91,11 @@ impl DirtCpu {
 
     /// A tracer over a structure already built from `tris`.
     pub fn from_ads(ads: Ads, tris: &[Triangle], traversal: Traversal) -> Self {
+        let params = ads.params;
         Self {
-            params: ads.params,
-            traversal,
             ads: Some(ads),
             tris: tris.to_vec(),
-            auto: None,
-            choice: None,
-            measure_traversal: false,
-            traversal_choice: None,
+            ..Self::new(params, traversal)
         }
     }
 
