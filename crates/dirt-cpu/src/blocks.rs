@@ -54,6 +54,7 @@ impl<T: Copy> Blocks<T> {
         }
     }
 
+    #[cfg(test)]
     pub(crate) fn iter(&self) -> impl Iterator<Item = T> + '_ {
         self.blocks.iter().flatten().copied()
     }
@@ -98,12 +99,40 @@ impl<T: Copy> Groups<T> {
         self.ends.shrink_to_fit();
     }
 
-    /// Calls `f(group, items)` for every closed group, in order.
-    pub(crate) fn for_each_group(&self, mut f: impl FnMut(usize, &mut dyn Iterator<Item = T>)) {
-        let (mut all, mut start) = (self.items.iter(), 0);
-        for (g, &end) in self.ends.iter().enumerate() {
-            f(g, &mut all.by_ref().take(end as usize - start));
-            start = end as usize;
+    /// Calls `item(state, group, x)` for every item of every closed group, in
+    /// order, and `end(state, group)` after each group's items (empty groups
+    /// included); `state` is what both may change. A walk over the blocks'
+    /// slices: the items are visited in a plain loop the compiler sees
+    /// through, not through an iterator per group.
+    pub(crate) fn for_each_group<S>(
+        &self,
+        state: &mut S,
+        mut item: impl FnMut(&mut S, usize, T),
+        mut end: impl FnMut(&mut S, usize),
+    ) {
+        let ends = &self.ends;
+        let (mut g, mut done) = (0usize, 0usize);
+        for block in &self.items.blocks {
+            let mut rest = block.as_slice();
+            while !rest.is_empty() {
+                // Close the groups that end here, then take the open group's
+                // items from this block (it may go on in the next).
+                while g < ends.len() && ends[g] as usize <= done {
+                    end(state, g);
+                    g += 1;
+                }
+                let upto = ends.get(g).map_or(usize::MAX, |&e| e as usize);
+                let take = (upto - done).min(rest.len());
+                let (head, tail) = rest.split_at(take);
+                for &x in head {
+                    item(state, g, x);
+                }
+                done += take;
+                rest = tail;
+            }
+        }
+        for g in g..ends.len() {
+            end(state, g);
         }
     }
 }
@@ -146,23 +175,58 @@ impl Budget {
 mod tests {
     use super::*;
 
-    #[test]
-    fn groups_give_back_each_groups_items() {
+    /// Groups of `sizes` items (counting up from 0) walked back.
+    fn walk(sizes: &[usize]) -> Vec<Vec<u32>> {
         let mut g = Groups::new();
-        let want: Vec<Vec<u32>> = vec![vec![1, 2], vec![], vec![3], vec![4, 5, 6]];
-        for items in &want {
-            for &x in items {
+        let mut x = 0u32;
+        for &n in sizes {
+            for _ in 0..n {
                 g.push(x);
+                x += 1;
             }
             g.close();
         }
-        let mut got: Vec<Vec<u32>> = Vec::new();
-        g.for_each_group(|k, items| {
-            assert_eq!(k, got.len());
-            got.push(items.collect());
-        });
-        assert_eq!(got, want);
-        assert_eq!(g.len(), 6);
+        assert_eq!(g.len(), x as usize);
+        let mut walked = (Vec::<Vec<u32>>::new(), Vec::<u32>::new());
+        g.for_each_group(
+            &mut walked,
+            |(got, open), k, x| {
+                assert_eq!(k, got.len(), "an item of group {k} given after its end");
+                open.push(x);
+            },
+            |(got, open), k| {
+                assert_eq!(k, got.len(), "groups ended in order");
+                got.push(std::mem::take(open));
+            },
+        );
+        let (got, open) = walked;
+        assert!(open.is_empty());
+        got
+    }
+
+    #[test]
+    fn groups_give_back_each_groups_items() {
+        // Empty groups first, in the middle and last; groups across the
+        // first blocks' ends (MIN, then 2·MIN items) and one larger than a block.
+        let cases: [&[usize]; 4] = [
+            &[2, 0, 1, 3],
+            &[0, 0, 5, 0],
+            &[MIN - 1, 2, 0, MIN, 7, 0, 0],
+            &[3, MAX + 100, 0, 2 * MAX, 1, 0],
+        ];
+        for sizes in cases {
+            let got = walk(sizes);
+            let mut x = 0u32;
+            let want: Vec<Vec<u32>> = sizes
+                .iter()
+                .map(|&n| {
+                    let v: Vec<u32> = (x..x + n as u32).collect();
+                    x += n as u32;
+                    v
+                })
+                .collect();
+            assert_eq!(got, want, "groups of {sizes:?}");
+        }
     }
 
     #[test]

@@ -97,7 +97,12 @@ fn fill_keeping(
     let n_lists = depth.len() * buckets as usize;
     // Count. The total comes from the prefix sum, not from one counter every
     // thread adds to at every node (its cache line went back and forth).
-    let counts: Vec<AtomicU32> = (0..n_lists).map(|_| AtomicU32::new(0)).collect();
+    // List `k` counts at `at[k + 1]`: the prefix sum turns that into the
+    // list's start, the fill's cursor, which the fill moves to the list's
+    // end, the next list's start; with `at[0] = 0` the array is then the
+    // offsets. One array serves as counts, cursors and offsets.
+    let mut at: Vec<AtomicU32> = (0..n_lists + 1).map(|_| AtomicU32::new(0)).collect();
+    let counts = &at[1..];
     // List indices are kept as u32; more lists than that keep nothing.
     let keep = u32::try_from(n_lists).is_ok();
     let budget = Budget::new(keep_max);
@@ -117,14 +122,13 @@ fn fill_keeping(
                 }
             };
             match frags {
-                Some(frags) => frags.for_each_group(|_, fragments| {
-                    for (tile, lo, hi) in fragments {
-                        for_each_bucket(depth, buckets, (tile as usize, lo, hi), |k| {
-                            add(&mut lists, k)
-                        });
-                    }
-                    lists.close();
-                }),
+                Some(frags) => frags.for_each_group(
+                    &mut lists,
+                    |lists, _, (tile, lo, hi)| {
+                        for_each_bucket(depth, buckets, (tile as usize, lo, hi), |k| add(lists, k));
+                    },
+                    |lists, _| lists.close(),
+                ),
                 None => {
                     for t in piece {
                         for_each_list(views, depth, buckets, t, |k| add(&mut lists, k));
@@ -136,23 +140,17 @@ fn fill_keeping(
         })
         .collect();
     // Exclusive prefix sum, in 64 bits: more than u32::MAX nodes is an error
-    // (the offsets written past it are never used), not a wrap.
-    let mut offsets = Vec::with_capacity(n_lists + 1);
+    // (the starts written past it are never used), not a wrap.
     let mut acc = 0u64;
-    for c in &counts {
-        offsets.push(acc as u32);
-        acc += u64::from(c.load(Ordering::Relaxed));
+    for c in &mut at[1..] {
+        let n = *c.get_mut();
+        *c.get_mut() = acc as u32;
+        acc += u64::from(n);
     }
     let Ok(acc) = u32::try_from(acc) else {
         return Err(CpuError::TooManyNodes { nodes: acc });
     };
-    offsets.push(acc);
-    // Fill through atomic cursors: the counters become the cursors (one
-    // transient u32 per list, not two).
-    let cursors = counts;
-    for (c, &o) in cursors.iter().zip(&offsets) {
-        c.store(o, Ordering::Relaxed);
-    }
+    let cursors = &at[1..];
     let ids: Vec<AtomicU32> = (0..acc).map(|_| AtomicU32::new(u32::MAX)).collect();
     let put = |k: usize, id: usize| {
         let at = cursors[k].fetch_add(1, Ordering::Relaxed);
@@ -164,11 +162,9 @@ fn fill_keeping(
         .for_each(|(p, (found, piece))| {
             let first = p * PIECE;
             match found {
-                Some(lists) => lists.for_each_group(|t, ks| {
-                    for k in ks {
-                        put(k as usize, first + t);
-                    }
-                }),
+                Some(lists) => {
+                    lists.for_each_group(&mut (), |_, t, k| put(k as usize, first + t), |_, _| {})
+                }
                 None => {
                     for (t, tri) in piece.iter().enumerate() {
                         for_each_list(views, depth, buckets, tri, |k| put(k, first + t));
@@ -176,7 +172,8 @@ fn fill_keeping(
                 }
             }
         });
-    drop(cursors);
+    let offsets: Vec<u32> = at.into_iter().map(AtomicU32::into_inner).collect();
+    debug_assert_eq!(offsets.last(), Some(&acc));
     let mut ids: Vec<u32> = ids.into_iter().map(AtomicU32::into_inner).collect();
     // Every slot was written exactly once (the counts and the fill walk the same pairs).
     debug_assert!(ids.iter().all(|&x| x != u32::MAX));
