@@ -283,7 +283,17 @@ impl Polygon {
 /// A triangle in a view's space, clipped to the view's (dilated) frustum, or
 /// `None` when it is entirely outside.
 pub fn clip_triangle_to_view(v: &View, tri: [[f32; 3]; 3]) -> Option<Polygon> {
-    let mut poly = Polygon::triangle(tri[0], tri[1], tri[2]);
+    let mut out = Polygon::EMPTY;
+    clip_triangle_to_view_into(v, tri, &mut out).then_some(out)
+}
+
+/// [`clip_triangle_to_view`] writing to `out` (only its first `len` vertices):
+/// false, with `out` empty, when the triangle is entirely outside. The planes'
+/// clips go back and forth between `out` and a scratch polygon instead of
+/// copying one polygon per plane.
+pub fn clip_triangle_to_view_into(v: &View, tri: [[f32; 3]; 3], out: &mut Polygon) -> bool {
+    out.v[..3].copy_from_slice(&tri);
+    out.len = 3;
     let planes = view_frustum(v);
     // Every vertex inside every plane (most triangles of a view that holds
     // the scene): each clip would keep the triangle as it is. The 18 tests
@@ -292,15 +302,27 @@ pub fn clip_triangle_to_view(v: &View, tri: [[f32; 3]; 3]) -> Option<Polygon> {
         .iter()
         .all(|h| tri.iter().all(|&p| h.eval(p, v.eps) >= 0.0))
     {
-        return Some(poly);
+        return true;
     }
+    let mut scratch = Polygon::EMPTY;
+    // Whether the current polygon is in `scratch` (else in `out`).
+    let mut in_scratch = false;
     for h in &planes {
-        poly.clip(h, v.eps);
-        if poly.len == 0 {
-            return None;
+        in_scratch ^= if in_scratch {
+            scratch.clip_into(h, v.eps, out)
+        } else {
+            out.clip_into(h, v.eps, &mut scratch)
+        };
+        let len = if in_scratch { scratch.len } else { out.len };
+        if len == 0 {
+            out.len = 0;
+            return false;
         }
     }
-    Some(poly)
+    if in_scratch {
+        out.copy_from(&scratch);
+    }
+    true
 }
 
 /// Depth extent of a (view-clipped) polygon inside the frustum of tile `(i, j)`
@@ -383,27 +405,41 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
 /// polygon clipped to column `i`'s x planes is computed once per column and
 /// only the y planes are applied per tile. Tiles are visited column by column.
 pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32, u32, f32, f32)) {
-    let Some(poly) = clip_triangle_to_view(v, tri) else {
+    let mut poly = Polygon::EMPTY;
+    if !clip_triangle_to_view_into(v, tri, &mut poly) {
         return;
-    };
+    }
     let Some((i0, i1, j0, j1)) = polygon_tile_range(v, &poly) else {
         return;
     };
-    // Scratch polygons for the per-tile clips: written only as far as used.
-    let (mut a, mut b, mut strip) = (Polygon::EMPTY, Polygon::EMPTY, Polygon::EMPTY);
+    // Scratch polygons for the per-tile clips: written only as far as used,
+    // and never copied (each clip reads one and writes the next).
+    let (mut a, mut b, mut lo, mut hi) = (
+        Polygon::EMPTY,
+        Polygon::EMPTY,
+        Polygon::EMPTY,
+        Polygon::EMPTY,
+    );
     for i in i0..=i1 {
         // One column: no x planes (tile_depth_extent).
         let column = if i0 == i1 {
             &poly
         } else {
             let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
-            strip.copy_from(&poly);
-            strip.clip(&lo_x, v.eps);
-            strip.clip(&hi_x, v.eps);
-            if strip.len == 0 {
+            let p = if poly.clip_into(&lo_x, v.eps, &mut lo) {
+                &lo
+            } else {
+                &poly
+            };
+            let p = if p.len > 0 && p.clip_into(&hi_x, v.eps, &mut hi) {
+                &hi
+            } else {
+                p
+            };
+            if p.len == 0 {
                 continue;
             }
-            &strip
+            p
         };
         if j0 == j1 {
             if let Some((lo, hi)) = column.depth_range() {
