@@ -94,10 +94,16 @@ pub fn left_out_views(
 /// configuration; the baseline that leaving out is measured against).
 pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CoreError> {
     params.validate()?;
-    if let Some(index) = tris.iter().position(|t| !t.is_finite()) {
+    use rayon::prelude::*;
+    if let Some(index) = tris.par_iter().position_first(|t| !t.is_finite()) {
         return Err(CoreError::NonFiniteTriangle { index });
     }
-    let mut bounds = Aabb::of_triangles(tris);
+    // On all threads: the union of the parts' bounds is the sequential
+    // bounds exactly (Aabb::union).
+    let mut bounds = tris
+        .par_chunks(4096)
+        .map(Aabb::of_triangles)
+        .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
     if bounds.is_empty() {
         bounds = Aabb {
             min: Vec3::splat(-1.0),

@@ -178,6 +178,20 @@ impl Aabb {
     /// every view fitted to them, are the same on the GPU, which reduces them
     /// with atomic min/max of that encoding. NaN coordinates are ignored.
     pub fn grow(&mut self, p: Vec3) {
+        self.take_in(p, p);
+    }
+
+    /// The smallest box holding both (of equal zeros as in [`Aabb::grow`]):
+    /// in that order the union is associative and commutative, so bounds
+    /// merged from parts in any grouping equal those grown point by point.
+    pub fn union(&self, other: &Aabb) -> Aabb {
+        let mut b = *self;
+        b.take_in(other.min, other.max);
+        b
+    }
+
+    /// `min` lowered to `lo`, `max` raised to `hi`, component-wise.
+    fn take_in(&mut self, lo: Vec3, hi: Vec3) {
         let lower = |a: f32, b: f32| b < a || (b == a && b.is_sign_negative());
         let pick_min = |a: f32, b: f32| if lower(a, b) { b } else { a };
         let pick_max = |a: f32, b: f32| {
@@ -188,14 +202,14 @@ impl Aabb {
             }
         };
         self.min = Vec3::new(
-            pick_min(self.min.x, p.x),
-            pick_min(self.min.y, p.y),
-            pick_min(self.min.z, p.z),
+            pick_min(self.min.x, lo.x),
+            pick_min(self.min.y, lo.y),
+            pick_min(self.min.z, lo.z),
         );
         self.max = Vec3::new(
-            pick_max(self.max.x, p.x),
-            pick_max(self.max.y, p.y),
-            pick_max(self.max.z, p.z),
+            pick_max(self.max.x, hi.x),
+            pick_max(self.max.y, hi.y),
+            pick_max(self.max.z, hi.z),
         );
     }
     pub fn of_triangles(tris: &[Triangle]) -> Aabb {
@@ -273,4 +287,40 @@ pub struct RayStats {
     pub buckets: u32,
     /// Ray/triangle tests.
     pub tests: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn coord() -> impl Strategy<Value = f32> {
+        prop_oneof![Just(0.0f32), Just(-0.0f32), -3.0f32..3.0]
+    }
+
+    proptest! {
+        // Bounds merged from parts, in any split and order, equal the bounds
+        // grown point by point, to the bit (signed zeros included).
+        #[test]
+        fn union_of_parts_equals_grown_bounds(
+            pts in prop::collection::vec((coord(), coord(), coord()), 0..40),
+            cut in 0usize..41,
+        ) {
+            let pts: Vec<Vec3> = pts.into_iter().map(|(x, y, z)| Vec3::new(x, y, z)).collect();
+            let cut = cut.min(pts.len());
+            let grow = |ps: &[Vec3]| {
+                let mut b = Aabb::EMPTY;
+                for &p in ps {
+                    b.grow(p);
+                }
+                b
+            };
+            let bits = |b: Aabb| (b.min.to_array().map(f32::to_bits), b.max.to_array().map(f32::to_bits));
+            let whole = bits(grow(&pts));
+            let (a, b) = (grow(&pts[..cut]), grow(&pts[cut..]));
+            prop_assert_eq!(bits(a.union(&b)), whole);
+            prop_assert_eq!(bits(b.union(&a)), whole);
+            prop_assert_eq!(bits(Aabb::EMPTY.union(&a).union(&b)), whole);
+        }
+    }
 }
