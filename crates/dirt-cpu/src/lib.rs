@@ -94,10 +94,11 @@ impl Ads {
     fn build_over(views: ViewSet, tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
         let t0 = Instant::now();
         // fill_primitives needs fill_depth's fragments again: kept while they
-        // take no more memory than the list offsets will (12 B a fragment,
-        // 4 B a list), which keeps the peak within its bound (ARCHITECTURE.md, "Memory").
+        // take no more memory than twice the list offsets will (12 B a
+        // fragment, 4 B a list), which keeps the peak within its bound
+        // (ARCHITECTURE.md, "Memory").
         let tiles = views.slots() * views.views.first().map_or(0, |v| v.tile_count());
-        let keep = tiles.saturating_mul(params.buckets as usize) / 3;
+        let keep = tiles.saturating_mul(params.buckets as usize) * 2 / 3;
         let (depth, fragments) = fill_depth::fill_depth_keeping(&views, tris, keep);
         let t1 = Instant::now();
         let hiz = mip_depth::mip_depth(&views, &depth);
