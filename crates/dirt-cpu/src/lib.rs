@@ -101,10 +101,16 @@ impl Ads {
         let keep = tiles.saturating_mul(params.buckets as usize) * 2 / 3;
         let (depth, fragments) = fill_depth::fill_depth_keeping(&views, tris, keep);
         let t1 = Instant::now();
-        let hiz = mip_depth::mip_depth(&views, &depth);
+        // The depth bounds become Hi-Z level 0, which fill_primitives reads.
+        let hiz = mip_depth::mip_depth_over(&views, depth);
         let t2 = Instant::now();
-        let lists =
-            fill_primitives::fill_primitives_from(&views, &depth, params.buckets, tris, fragments)?;
+        let lists = fill_primitives::fill_primitives_from(
+            &views,
+            &hiz[0],
+            params.buckets,
+            tris,
+            fragments,
+        )?;
         let t3 = Instant::now();
         let timings = BuildTimings {
             fill_depth: t1 - t0,

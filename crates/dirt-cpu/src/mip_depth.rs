@@ -11,10 +11,15 @@ use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF};
 
 /// All levels, level 0 first (a copy of `depth`).
 pub fn mip_depth(views: &ViewSet, depth: &[[u32; 2]]) -> Vec<Vec<[u32; 2]>> {
+    mip_depth_over(views, depth.to_vec())
+}
+
+/// [`mip_depth`] taking the depth bounds as level 0 instead of copying them.
+pub fn mip_depth_over(views: &ViewSet, depth: Vec<[u32; 2]>) -> Vec<Vec<[u32; 2]>> {
     let tiles = views.views.first().map_or(1, |v| v.tiles);
     let n_views = views.slots();
     let levels = hiz_levels(tiles);
-    let mut out = vec![depth.to_vec()];
+    let mut out = vec![depth];
     for l in 1..levels {
         let src_w = hiz_width(tiles, l - 1) as usize;
         let w = hiz_width(tiles, l) as usize;

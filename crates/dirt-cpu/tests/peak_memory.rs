@@ -77,9 +77,9 @@ fn peak_build_memory_is_within_the_stated_margin_of_the_structure() {
             );
             // On top of the structure come the build's transients: the
             // fragments fill_depth keeps, the list indices the count pass
-            // keeps for the fill, the atomic ids before sorting, and the copy
-            // of the depth bounds: at most 2.5x the structure (measured 1.34x
-            // to 2.07x; ARCHITECTURE.md, "Memory").
+            // keeps for the fill and the atomic ids before sorting: at most
+            // 2.5x the structure (measured 1.26x to 2.03x; ARCHITECTURE.md,
+            // "Memory").
             assert!(structure > 0.0);
             assert!(
                 ratio <= 2.5,

@@ -2,7 +2,14 @@ use dirt_core::{AdsParams, ViewsKind};
 use std::time::Instant;
 fn main() {
     let a: Vec<String> = std::env::args().collect();
-    let scene = dirt_scene::open(&a[1]).expect("scene");
+    let wave;
+    let scene_tris = if a[1] == "wave" {
+        wave = dirt_eval::dynamic::wave_grid(128, 0.3);
+        &wave
+    } else {
+        wave = dirt_scene::open(&a[1]).expect("scene").triangles;
+        &wave
+    };
     let r: u32 = a[2].parse().unwrap();
     let n: usize = a[3].parse().unwrap();
     let views = if a.get(4).map(|s| s.as_str()) == Some("cube") {
@@ -17,7 +24,7 @@ fn main() {
         tile: 1,
         center: None,
     };
-    let tris = &scene.triangles;
+    let tris = scene_tris;
     let mut best = f64::INFINITY;
     for _ in 0..n {
         let t0 = Instant::now();
