@@ -396,6 +396,28 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
     ))
 }
 
+/// `poly` clipped to two half-spaces in turn ([`Polygon::clip`] twice, bit
+/// for bit), writing into the scratch polygons `a` and `b` only where a clip
+/// changes something: the result is `poly`, `a` or `b`, never a copy.
+fn clip_pair<'a>(
+    poly: &'a Polygon,
+    [h0, h1]: [&HalfSpace; 2],
+    eps: f32,
+    a: &'a mut Polygon,
+    b: &'a mut Polygon,
+) -> &'a Polygon {
+    let p = if poly.clip_into(h0, eps, a) {
+        &*a
+    } else {
+        poly
+    };
+    if p.len > 0 && p.clip_into(h1, eps, b) {
+        b
+    } else {
+        p
+    }
+}
+
 /// Calls `f(i, j, zlo, zhi)` for every tile of `v` whose dilated frustum the
 /// triangle (in view space) touches, with its conservative depth extent there.
 /// This is the coverage rule shared by `fill_depth` and `fill_primitives`.
@@ -426,16 +448,7 @@ pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32
             &poly
         } else {
             let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
-            let p = if poly.clip_into(&lo_x, v.eps, &mut lo) {
-                &lo
-            } else {
-                &poly
-            };
-            let p = if p.len > 0 && p.clip_into(&hi_x, v.eps, &mut hi) {
-                &hi
-            } else {
-                p
-            };
+            let p = clip_pair(&poly, [&lo_x, &hi_x], v.eps, &mut lo, &mut hi);
             if p.len == 0 {
                 continue;
             }
@@ -449,16 +462,7 @@ pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32
         }
         for j in j0..=j1 {
             let [_, _, lo_y, hi_y] = block_frustum(v, i, i + 1, j, j + 1);
-            let p = if column.clip_into(&lo_y, v.eps, &mut a) {
-                &a
-            } else {
-                column
-            };
-            let p = if p.len > 0 && p.clip_into(&hi_y, v.eps, &mut b) {
-                &b
-            } else {
-                p
-            };
+            let p = clip_pair(column, [&lo_y, &hi_y], v.eps, &mut a, &mut b);
             if let Some((lo, hi)) = p.depth_range() {
                 f(i, j, lo - v.eps, hi + v.eps);
             }
