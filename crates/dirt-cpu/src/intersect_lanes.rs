@@ -5,8 +5,11 @@
 //! edge function cancels too much takes [`edge_function`]'s accurate path on
 //! its own; a lane that passes the sign test ends in the scalar
 //! [`finish`]. Every value a lane computes is the scalar test's, from the
-//! same operands in the same order (`+ − ×`, comparisons; no fused
-//! multiply-add), so each lane's result is [`intersect`]'s, bit for bit.
+//! same operands in the same order (`+ − ×`, correctly rounded `/`,
+//! comparisons; no fused multiply-add), so each lane's result is
+//! [`intersect`]'s, bit for bit. The lanes also compute [`finish`]'s `t` and
+//! test its range, the best hit so far as the cap, so only candidates that
+//! could be kept reach the scalar rest.
 //!
 //! The closest hit does not depend on the order the candidates are tested
 //! in: [`intersect`] does not read the best hit, and [`Hit::closer_than`] is
@@ -84,13 +87,28 @@ pub(crate) fn intersect_closest_lanes(
     if !pass.iter().any(|&x| x) {
         return;
     }
+    // finish's determinant and `t`, as lanes, and its range test with the
+    // best hit so far as the cap: a lane that fails here would fail there
+    // (the cap only falls as lanes are kept), so only the rest go on.
+    let det: L = from_fn(|k| e0[k] + e1[k] + e2[k]);
+    let sz = sh.sz;
+    let tt: L =
+        from_fn(|k| e0[k] * (sz * a[kz][k]) + e1[k] * (sz * b[kz][k]) + e2[k] * (sz * c[kz][k]));
+    let t: L = from_fn(|k| tt[k] / det[k]);
+    let cap = best.t;
+    let pass: [bool; LANES] = from_fn(|k| {
+        pass[k] & (det[k] != 0.0) & (t[k] >= ray.tmin) & (t[k] <= ray.tmax) & (t[k] <= cap)
+    });
+    if !pass.iter().any(|&x| x) {
+        return;
+    }
     for k in 0..LANES {
         if !pass[k] {
             continue;
         }
         let vertex = |p: &[L; 3]| -> [f32; 3] { from_fn(|axis| p[axis][k]) };
         let abc = [vertex(&a), vertex(&b), vertex(&c)];
-        let hit = finish(ray, sh, tri[k], abc, [e0[k], e1[k], e2[k]]);
+        let hit = finish(ray, sh, tri[k], abc, [e0[k], e1[k], e2[k]], best.t);
         keep_closest(hit, ids[k], best);
     }
 }
@@ -99,7 +117,7 @@ pub(crate) fn intersect_closest_lanes(
 mod tests {
     use super::*;
     use dirt_math::Vec3;
-    use dirt_math::triangle::intersect_closest;
+    use dirt_math::triangle::{intersect, intersect_closest};
     use proptest::prelude::*;
 
     fn coord() -> impl Strategy<Value = f32> {
@@ -135,12 +153,13 @@ mod tests {
             })
     }
 
-    /// The scalar loop: each id in turn.
+    /// The scalar loop: each id in turn, every candidate tested in full
+    /// (no cap), so the cap the lanes use is checked too.
     fn scalar(ray: &Ray, tris: &[Triangle], ids: &[u32]) -> Hit {
         let sh = RayShear::new(ray);
         let mut best = Hit::MISS;
         for &id in ids {
-            intersect_closest(ray, &sh, &tris[id as usize], id, &mut best);
+            keep_closest(intersect(ray, &sh, &tris[id as usize]), id, &mut best);
         }
         best
     }

@@ -110,6 +110,17 @@ pub fn edge_function(a: f32, b: f32, c: f32, d: f32) -> f32 {
 /// what lets DIRT find every hit this test reports.
 #[inline]
 pub fn intersect(ray: &Ray, sh: &RayShear, tri: &Triangle) -> Option<(f32, f32, f32)> {
+    intersect_below(ray, sh, tri, f32::INFINITY)
+}
+
+/// [`intersect`], with candidates beyond `cap` left out early (see [`finish`]).
+#[inline]
+pub fn intersect_below(
+    ray: &Ray,
+    sh: &RayShear,
+    tri: &Triangle,
+    cap: f32,
+) -> Option<(f32, f32, f32)> {
     let o = ray.origin;
     let (kx, ky, kz) = (sh.kx, sh.ky, sh.kz);
     // Vertices relative to the origin.
@@ -130,7 +141,7 @@ pub fn intersect(ray: &Ray, sh: &RayShear, tri: &Triangle) -> Option<(f32, f32, 
     if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
         return None;
     }
-    finish(ray, sh, tri, [a, b, c], [e0, e1, e2])
+    finish(ray, sh, tri, [a, b, c], [e0, e1, e2], cap)
 }
 
 /// The rest of [`intersect`] for a candidate whose edge functions `e` (of the
@@ -138,6 +149,11 @@ pub fn intersect(ray: &Ray, sh: &RayShear, tri: &Triangle) -> Option<(f32, f32, 
 /// test: the determinant, `t`, the barycentrics and the point check. Apart
 /// so that a lane-wise front (several triangles at once) can end in the same
 /// operations, and so the same bits.
+///
+/// A candidate whose `t` exceeds `cap` is `None` before the barycentrics and
+/// the point check: a caller that keeps the closest hit passes its best `t`
+/// (a `t` above it could not be kept, and one equal to it still is, so the
+/// closest hit does not change). [`intersect`] passes infinity.
 #[inline]
 pub fn finish(
     ray: &Ray,
@@ -145,6 +161,7 @@ pub fn finish(
     tri: &Triangle,
     [a, b, c]: [[f32; 3]; 3],
     [e0, e1, e2]: [f32; 3],
+    cap: f32,
 ) -> Option<(f32, f32, f32)> {
     let kz = sh.kz;
     let det = e0 + e1 + e2;
@@ -156,7 +173,7 @@ pub fn finish(
     let cz = sh.sz * c[kz];
     let tt = e0 * az + e1 * bz + e2 * cz;
     let t = tt / det;
-    if !(t >= ray.tmin && t <= ray.tmax) {
+    if !(t >= ray.tmin && t <= ray.tmax && t <= cap) {
         return None;
     }
     let u = e1 / det;
@@ -200,7 +217,8 @@ pub fn is_degenerate(tri: &Triangle) -> bool {
 /// deterministic order of §2 (smaller `t`, then smaller id).
 #[inline]
 pub fn intersect_closest(ray: &Ray, sh: &RayShear, tri: &Triangle, prim: u32, best: &mut Hit) {
-    keep_closest(intersect(ray, sh, tri), prim, best);
+    // A hit beyond the best one could not be kept: its barycentrics are not needed.
+    keep_closest(intersect_below(ray, sh, tri, best.t), prim, best);
 }
 
 /// Keeps the hit `(t, u, v)` of triangle `prim`, if any, in `best` when it is
