@@ -19,7 +19,8 @@
 
 use crate::{Ads, CpuError, trace_with_stats};
 use dirt_core::{AdsParams, BindingLimits, SplitArray, Traversal, ViewsKind};
-use dirt_math::{Ray, Triangle};
+use dirt_math::view::single_sees_all;
+use dirt_math::{Aabb, Ray, Triangle, Vec3};
 
 /// Weights of the frame-cost model, in nanoseconds per unit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -298,6 +299,29 @@ pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
     out
 }
 
+/// The candidates placed at `origin`, where a frame's rays start (a camera's
+/// eye): the cube centred there, which is exact wherever it stands, and the
+/// single view from there when it sees all of `bounds`
+/// ([`single_sees_all`]), each over the resolutions and B of [`candidates`].
+/// A ray that starts at a view's apex projects to one point of it, so the
+/// walk of such a ray stays near one pixel (0.4 tiles a ray, against 44 for
+/// the single view outside the scene, on the eval's deforming grid).
+pub fn candidates_at(origin: Vec3, bounds: &Aabb) -> Vec<AdsParams> {
+    let mut out = Vec::new();
+    for views in [ViewsKind::Cube, ViewsKind::Single] {
+        if views == ViewsKind::Single && !single_sees_all(origin, bounds) {
+            continue;
+        }
+        let base = AdsParams {
+            views,
+            center: Some(origin),
+            ..AdsParams::default()
+        };
+        out.extend(candidates(&base, false));
+    }
+    out
+}
+
 /// Builds every candidate, traces `sample` through it for its counts, and
 /// ranks the candidates by predicted frame time for `rays_per_frame` rays
 /// (cheapest first). Every candidate gives the same hits: only time and
@@ -452,6 +476,25 @@ pub fn sample_rays(tris: &[Triangle], n: usize, seed: u64) -> Vec<Ray> {
         .collect()
 }
 
+/// The point every ray of `rays` starts at, when they all start at one
+/// (bit for bit, and finite): a camera's primary rays. `None` for no rays.
+pub fn common_origin(rays: &[Ray]) -> Option<Vec3> {
+    let first = rays.first()?.origin;
+    let bits = first.map(f32::to_bits);
+    (rays.iter().all(|r| r.origin.map(f32::to_bits) == bits) && first.iter().all(|c| c.is_finite()))
+        .then(|| Vec3::from(first))
+}
+
+/// A deterministic sample of `n` rays from `origin` (a camera's eye) towards
+/// random points of random triangles, for the model when a frame's rays
+/// start there: every ray of the sample reaches the scene.
+pub fn sample_rays_from(origin: Vec3, tris: &[Triangle], n: usize, seed: u64) -> Vec<Ray> {
+    sample_rays(tris, n, seed)
+        .iter()
+        .map(|r| Ray::new(origin, r.origin() - origin, 0.0, f32::INFINITY))
+        .collect()
+}
+
 /// What [`auto`] chose and what it cost to choose.
 #[derive(Debug)]
 pub struct AutoChoice {
@@ -498,15 +541,15 @@ fn first_guess(tris: usize, views: ViewsKind, resolutions: &[u32]) -> u32 {
 /// cheaply enough to be a default: a local search over `candidates` instead of
 /// building them all ([`choose`]).
 ///
-/// 1. Per view kind, a first guess: the resolution of [`first_guess`] with the
-///    B nearest 8. View kinds are tried in the order of their estimated
-///    frames (one view costs less to build than six).
+/// 1. Per placement (view kind and centre), a first guess: the resolution of
+///    [`first_guess`] with the B nearest 8. Placements are tried in the order
+///    of their estimated frames (one view costs less to build than six).
 /// 2. From the best candidate so far, its neighbours (resolution halved or
-///    doubled, B halved or doubled, same views) are tried, cheapest estimate
+///    doubled, B halved or doubled, same placement) are tried, cheapest estimate
 ///    first; the search moves to a neighbour that beats it and stops when none does.
 ///
 /// A candidate is built only when an estimate of its frame can beat the best
-/// so far — the nodes of a built candidate of the same views that it
+/// so far — the nodes of a built candidate of the same placement that it
 /// dominates (nodes grow with resolution and B), `triangles × views` with the
 /// kind's view count, and the per-ray constant for every ray — and when the
 /// predicted cost of the candidates built, plus its own estimated build, stays
@@ -553,6 +596,8 @@ pub fn auto_within(
     let mut tried = vec![false; candidates.len()];
     let mut spent_ms = 0.0;
     let per_ray_floor = model.ns_per_ray * rays_per_frame as f64 * 1e-6;
+    // Candidates of one placement (views and centre) are neighbours.
+    let same_place = |p: &AdsParams, q: &AdsParams| p.views == q.views && p.center == q.center;
     let view_count = |p: &AdsParams| match p.views {
         ViewsKind::Cube => 6.0,
         ViewsKind::Single => 1.0,
@@ -563,7 +608,7 @@ pub fn auto_within(
         let nodes = ranked
             .iter()
             .filter(|c| {
-                c.params.views == p.views
+                same_place(&c.params, p)
                     && res(&c.params) <= res(p)
                     && c.params.buckets <= p.buckets
             })
@@ -610,18 +655,24 @@ pub fn auto_within(
         ranked.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
         Ok(wins)
     };
-    // 1. A first guess per view kind, the kind with the cheaper estimate first.
+    // 1. A first guess per placement, the one with the cheaper estimate first.
     let resolutions: Vec<u32> = {
         let mut r: Vec<u32> = candidates.iter().map(|p| p.resolution).collect();
         r.sort_unstable();
         r.dedup();
         r
     };
+    let mut places: Vec<AdsParams> = Vec::new();
+    for p in candidates {
+        if !places.iter().any(|q| same_place(p, q)) {
+            places.push(*p);
+        }
+    }
     let mut guesses: Vec<usize> = Vec::new();
-    for kind in [ViewsKind::Single, ViewsKind::Cube] {
-        let r0 = first_guess(tris.len(), kind, &resolutions);
+    for place in &places {
+        let r0 = first_guess(tris.len(), place.views, &resolutions);
         let guess = (0..candidates.len())
-            .filter(|&k| candidates[k].views == kind)
+            .filter(|&k| same_place(&candidates[k], place))
             .min_by_key(|&k| {
                 let p = &candidates[k];
                 (p.resolution.abs_diff(r0), p.buckets.abs_diff(8), p.buckets)
@@ -668,7 +719,7 @@ pub fn auto_within(
                 let p = &candidates[k];
                 let (r, b) = (res(p), p.buckets);
                 let (r0, b0) = (res(&at), at.buckets);
-                p.views == at.views
+                same_place(p, &at)
                     && ((b == b0 && (r == r0 * 2 || r * 2 == r0))
                         || (r == r0 && (b == b0 * 2 || b * 2 == b0)))
             })

@@ -5,8 +5,10 @@ use crate::cost::{self, AutoChoice, CostModel, TraversalChoice};
 use crate::{Ads, CpuError, trace_into};
 use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
-    Triangle, check_lengths,
+    Triangle, ViewsKind, check_lengths,
 };
+use dirt_math::view::single_sees_all;
+use dirt_math::{Aabb, Vec3};
 use web_time::Instant;
 
 /// Rays in the sample [`DirtCpu::auto`] measures candidates with.
@@ -31,6 +33,10 @@ pub struct DirtCpu {
     /// at each choice ([`cost::faster_traversal`]); the last timing.
     measure_traversal: bool,
     traversal_choice: Option<TraversalChoice>,
+    /// Where a frame's rays start, when the caller says ([`DirtCpu::with_origin`]).
+    origin: Option<Vec3>,
+    /// Rays like a frame's, when the caller gives them ([`DirtCpu::with_sample`]).
+    sample: Option<Vec<Ray>>,
 }
 
 impl DirtCpu {
@@ -46,7 +52,45 @@ impl DirtCpu {
             choice: None,
             measure_traversal: false,
             traversal_choice: None,
+            origin: None,
+            sample: None,
         }
+    }
+
+    /// Gives [`DirtCpu::auto`] rays like a frame's (`None`: generated ones).
+    /// The cost model measures its candidates on at most [`AUTO_SAMPLE`] of
+    /// them, evenly strided ([`cost::stride_sample`]), and the traversals are
+    /// timed on at most [`TRAVERSAL_SAMPLE`]: a choice made on the rays the
+    /// frames trace fits them better than one made on generated rays. Used at
+    /// the next choice.
+    pub fn set_sample(&mut self, rays: Option<&[Ray]>) {
+        self.sample = rays.map(|r| cost::stride_sample(r, TRAVERSAL_SAMPLE));
+    }
+
+    /// [`DirtCpu::set_sample`] as a builder.
+    pub fn with_sample(mut self, rays: &[Ray]) -> Self {
+        self.set_sample(Some(rays));
+        self
+    }
+
+    /// Tells [`DirtCpu::auto`] where each frame's rays start (a camera's eye;
+    /// `None`: anywhere). The cost model then weighs the views placed there
+    /// ([`cost::candidates_at`]: the cube centred at the origin, and the single
+    /// view from it when it sees the whole scene), measured on the sample of
+    /// [`DirtCpu::set_sample`], else on rays from the origin
+    /// ([`cost::sample_rays_from`]). Each of them is exact for every ray,
+    /// from anywhere, so a ray that starts elsewhere is still traced right. A choice placed at the origin follows it when
+    /// it moves (set it before each frame's build); a single view whose scene
+    /// has grown out of its frustum, or whose origin is gone, is chosen again.
+    /// Without [`DirtCpu::auto`] the origin is not used.
+    pub fn set_origin(&mut self, origin: Option<Vec3>) {
+        self.origin = origin;
+    }
+
+    /// [`DirtCpu::set_origin`] as a builder.
+    pub fn with_origin(mut self, origin: Vec3) -> Self {
+        self.set_origin(Some(origin));
+        self
     }
 
     /// A tracer whose parameters the cost model chooses ([`cost::auto`]) for
@@ -124,34 +168,71 @@ impl DirtCpu {
 
 impl Tracer for DirtCpu {
     fn name(&self) -> String {
-        match self.choice() {
-            // Say what the cost model chose, since nobody gave it.
-            Some(c) => {
-                let p = c.best.params;
-                format!(
-                    "dirt-cpu ({}; the cost model's {} r{} B{} S{})",
-                    self.traversal, p.views, p.resolution, p.buckets, p.tile
-                )
-            }
-            None => format!("dirt-cpu ({})", self.traversal),
+        if self.choice().is_none() {
+            return format!("dirt-cpu ({})", self.traversal);
         }
+        // Say what the cost model chose, since nobody gave it (the centre
+        // follows the origin, so it is read from the parameters in use).
+        let p = self.params;
+        let at = if p.center.is_some() {
+            " at the rays' origin"
+        } else {
+            ""
+        };
+        format!(
+            "dirt-cpu ({}; the cost model's {} r{} B{} S{}{at})",
+            self.traversal, p.views, p.resolution, p.buckets, p.tile
+        )
     }
 
     fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
         self.ads = None;
         let mut stages = Vec::new();
+        if let Some(o) = self.origin
+            && !o.is_finite()
+        {
+            return Err(CoreError::InvalidParams(format!(
+                "the rays' origin {o} is not finite"
+            )));
+        }
+        // Only a choice at an origin reads the bounds.
+        let bounds = || Aabb::of_triangles(tris);
+        if self.auto.is_some() && self.params.center.is_some() {
+            // A choice placed at the origin moves with it; a single view must
+            // still see the whole scene from there, else the choice is made again.
+            match self.origin {
+                Some(o) => self.params.center = Some(o),
+                None => self.choice = None,
+            }
+            if let Some(c) = self.params.center
+                && self.params.views == ViewsKind::Single
+                && !single_sees_all(c, &bounds())
+            {
+                self.choice = None;
+            }
+        }
         if let Some(rays_per_frame) = self.auto
             && self.choice.as_ref().is_none_or(|(n, _)| *n != tris.len())
         {
             let start = Instant::now();
-            let sample = cost::sample_rays(tris, AUTO_SAMPLE, 1);
+            // Rays that all start at one point are best served by views
+            // placed there (one point of a view a ray): only those are weighed.
+            let candidates = match self.origin {
+                Some(o) => cost::candidates_at(o, &bounds()),
+                None => cost::candidates(&AdsParams::default(), true),
+            };
+            let sample = match (&self.sample, self.origin) {
+                (Some(rays), _) => cost::stride_sample(rays, AUTO_SAMPLE),
+                (None, Some(o)) => cost::sample_rays_from(o, tris, AUTO_SAMPLE, 1),
+                (None, None) => cost::sample_rays(tris, AUTO_SAMPLE, 1),
+            };
             let mut choice = cost::auto(
                 tris,
                 &sample,
                 rays_per_frame,
                 self.traversal,
                 &CostModel::CALIBRATED,
-                &cost::candidates(&AdsParams::default(), true),
+                &candidates,
             )?;
             self.params = choice.best.params;
             let built = choice.best_ads.take();
@@ -168,7 +249,11 @@ impl Tracer for DirtCpu {
             };
             if self.measure_traversal {
                 let start = Instant::now();
-                let sample = cost::sample_rays(tris, TRAVERSAL_SAMPLE, 2);
+                let sample = match (&self.sample, self.origin) {
+                    (Some(rays), _) => rays.clone(),
+                    (None, Some(o)) => cost::sample_rays_from(o, tris, TRAVERSAL_SAMPLE, 2),
+                    (None, None) => cost::sample_rays(tris, TRAVERSAL_SAMPLE, 2),
+                };
                 let timed = cost::faster_traversal(&ads, tris, &sample);
                 self.traversal = timed.traversal;
                 self.traversal_choice = Some(timed);

@@ -166,3 +166,136 @@ fn auto_without_a_traversal_times_both_and_stays_exact() {
     assert!(fixed.traversal_choice().is_none());
     assert_eq!(fixed.traversal, Traversal::Linear);
 }
+
+/// Rays from `eye` towards random points of the soup's box.
+fn rays_from(eye: Vec3, n: usize, rng: &mut Rng) -> Vec<Ray> {
+    (0..n)
+        .map(|_| {
+            let target = rng.v(1.2);
+            Ray::new(eye, target - eye, 0.0, f32::INFINITY)
+        })
+        .collect()
+}
+
+// Views placed where a frame's rays start (cost::candidates_at): the cube
+// centred there, and the single view from there where it sees the whole
+// scene, are exact for every ray, from anywhere. A single view from an eye
+// that does not see all (inside the scene) is not offered, and would miss.
+#[test]
+fn views_placed_at_an_origin_are_exact_where_they_are_offered() {
+    use dirt_cpu::cost::candidates_at;
+    use dirt_math::Aabb;
+    use dirt_math::view::single_sees_all;
+    let mut rng = Rng(21);
+    let tris = soup(300, &mut rng);
+    let bounds = Aabb::of_triangles(&tris);
+    let mut seen_all = 0;
+    for eye in [
+        Vec3::new(0.0, 0.5, 6.0),
+        Vec3::new(-4.0, 3.0, 2.5),
+        Vec3::new(2.2, 2.0, 2.0),
+        Vec3::new(0.3, 0.2, 0.1),
+    ] {
+        let mut rs = rays(1500, &tris, &mut rng);
+        rs.extend(rays_from(eye, 1500, &mut rng));
+        let truth = brute_force::trace(&tris, &rs);
+        let sees_all = single_sees_all(eye, &bounds);
+        seen_all += usize::from(sees_all);
+        let offered = candidates_at(eye, &bounds);
+        let count = |v: ViewsKind| offered.iter().filter(|p| p.views == v).count();
+        assert_eq!(count(ViewsKind::Cube), 18, "{eye}");
+        assert_eq!(
+            count(ViewsKind::Single),
+            if sees_all { 18 } else { 0 },
+            "{eye}"
+        );
+        assert!(offered.iter().all(|p| p.center == Some(eye)));
+        for p in offered
+            .iter()
+            .filter(|p| p.buckets == 8 && [16, 64].contains(&p.resolution))
+        {
+            let ads = Ads::build(&tris, p).expect("build");
+            for trav in [Traversal::Linear, Traversal::HiZ] {
+                let (hits, _) = trace_with_stats(&ads, &tris, &rs, trav);
+                let bad = (0..rs.len())
+                    .filter(|&i| hits[i].bits() != truth[i].bits())
+                    .count();
+                assert_eq!(bad, 0, "{:?} r{} at {eye} {trav:?}", p.views, p.resolution);
+            }
+        }
+        if !sees_all {
+            // What the check keeps out: the single view there loses hits.
+            let p = AdsParams {
+                views: ViewsKind::Single,
+                resolution: 64,
+                center: Some(eye),
+                ..AdsParams::default()
+            };
+            let ads = Ads::build(&tris, &p).expect("build");
+            let (hits, _) = trace_with_stats(&ads, &tris, &rs, Traversal::HiZ);
+            let bad = (0..rs.len())
+                .filter(|&i| hits[i].bits() != truth[i].bits())
+                .count();
+            assert!(bad > 0, "the single view at {eye} lost nothing");
+        }
+    }
+    assert!(seen_all >= 2, "{seen_all} eyes see the whole soup");
+    assert!(!single_sees_all(Vec3::NAN, &bounds));
+}
+
+// DirtCpu::auto told where the rays start: the views placed there are
+// candidates too, a choice placed there follows the origin when it moves,
+// and the hits stay exact; a non-finite origin is an error.
+#[test]
+fn auto_with_an_origin_weighs_views_there_and_follows_it() {
+    use dirt_core::Tracer;
+    use dirt_cpu::DirtCpu;
+    use dirt_cpu::brute_force::Brute;
+    let mut rng = Rng(22);
+    let tris = soup(300, &mut rng);
+    let eye = Vec3::new(0.0, 0.5, 6.0);
+    let mut t = DirtCpu::auto(Some(Traversal::HiZ), 1_000_000).with_origin(eye);
+    t.build(&tris).expect("build");
+    let choice = t.choice().expect("a choice");
+    // Only views at the eye are weighed: the cube and (it sees the whole soup) the single view.
+    assert_eq!(choice.ranked.len() + choice.skipped, 36);
+    assert!(choice.ranked.iter().all(|c| c.params.center == Some(eye)));
+    assert_eq!(t.params.center, Some(eye));
+    assert!(t.name().ends_with("at the rays' origin)"), "{}", t.name());
+    let mut rs = rays_from(eye, 2000, &mut rng);
+    rs.extend(rays(1000, &tris, &mut rng));
+    let brute = Brute::new(&tris).trace(&rs).expect("brute");
+    assert_eq!(t.trace(&rs).expect("trace"), brute);
+    let chosen = t.params;
+    // The camera moves: a choice placed at the eye moves with it, unchosen.
+    let eye2 = Vec3::new(-1.0, 0.8, 5.5);
+    t.set_origin(Some(eye2));
+    let moved = t.build(&tris).expect("build");
+    assert!(moved.stages.iter().all(|s| s.0 != "choose"));
+    assert_eq!(t.params.center, Some(eye2));
+    assert_eq!(
+        (t.params.views, t.params.resolution),
+        (chosen.views, chosen.resolution)
+    );
+    assert_eq!(t.trace(&rs).expect("trace"), brute);
+    // Into the scene: a single view cannot see all from there; the cube still can.
+    let inside = Vec3::new(0.1, 0.0, 0.2);
+    t.set_origin(Some(inside));
+    let again = t.build(&tris).expect("build");
+    assert_eq!(t.params.center, Some(inside));
+    if chosen.views == ViewsKind::Single {
+        assert_eq!(again.stages.first().map(|s| s.0), Some("choose"));
+    }
+    assert_eq!(t.params.views, ViewsKind::Cube);
+    assert_eq!(t.trace(&rs).expect("trace"), brute);
+    // No origin any more: chosen again, placed as by default.
+    t.set_origin(None);
+    let plain = t.build(&tris).expect("build");
+    assert_eq!(plain.stages.first().map(|s| s.0), Some("choose"));
+    assert_eq!(t.params.center, None);
+    assert_eq!(t.trace(&rs).expect("trace"), brute);
+    // A non-finite origin is refused, not traced.
+    t.set_origin(Some(Vec3::new(f32::NAN, 0.0, 0.0)));
+    let err = t.build(&tris).expect_err("a NaN origin");
+    assert!(err.to_string().contains("not finite"), "{err}");
+}

@@ -317,7 +317,8 @@ impl ViewSet {
     /// ([`single_axis`]) from its negative side, far enough that the bounding
     /// sphere lies inside its frustum: then every triangle is seen and tracing
     /// is exact for every ray. With `eye`, it looks from there towards the
-    /// bounds' centre; geometry outside its frustum is not seen.
+    /// bounds' centre; geometry outside its frustum is not seen, unless
+    /// [`single_sees_all`] holds for the eye.
     pub fn single(eye: Option<Vec3>, bounds: &Aabb, tiles: u32) -> ViewSet {
         let c = bounds.center();
         let r = (bounds.extent().length() * 0.5).max(f32::MIN_POSITIVE);
@@ -364,6 +365,29 @@ impl ViewSet {
     }
 }
 
+/// Room [`single_sees_all`] leaves between the bounding sphere and the cone
+/// inside the single view's frustum: the sphere's radius is taken this much
+/// larger, far beyond the rounding of projecting a point.
+const SEES_ALL_MARGIN: f32 = 1.05;
+
+/// Whether the single view from `eye` ([`ViewSet::single`] with `Some(eye)`,
+/// looking at the centre of `bounds`) sees all of `bounds`: the bounding
+/// sphere (its radius [`SEES_ALL_MARGIN`] larger) lies inside the 45° cone
+/// within its frustum, and beyond its near plane. Then every triangle is
+/// seen, and tracing through that view is exact for every ray, as through the
+/// default placement. False for a non-finite eye or bounds, and for an eye
+/// inside the sphere (only the cube sees around it).
+pub fn single_sees_all(eye: Vec3, bounds: &Aabb) -> bool {
+    let c = bounds.center();
+    let r = bounds.extent().length() * 0.5 * SEES_ALL_MARGIN;
+    let d = (c - eye).length();
+    eye.is_finite()
+        && r.is_finite()
+        && d.is_finite()
+        && d * std::f32::consts::FRAC_1_SQRT_2 >= r
+        && near_distance(eye, bounds) < d - r
+}
+
 /// `v` with `-0.0` components replaced by `+0.0`.
 pub fn positive_zeros(v: Vec3) -> Vec3 {
     let f = |x: f32| if x == 0.0 { 0.0 } else { x };
@@ -392,6 +416,30 @@ mod tests {
         Aabb {
             min: Vec3::splat(-1.0),
             max: Vec3::splat(1.0),
+        }
+    }
+
+    #[test]
+    fn single_sees_all_needs_the_sphere_inside_the_cone() {
+        // Unit box: radius sqrt(3), 5 % more; the cone needs sqrt(2) times that.
+        let need = 3f32.sqrt() * 1.05 * std::f32::consts::SQRT_2;
+        let b = unit_box();
+        for dir in [Vec3::Z, Vec3::NEG_X, Vec3::new(1.0, 2.0, -2.0).normalize()] {
+            assert!(single_sees_all(dir * (need * 1.01), &b), "{dir}");
+            assert!(!single_sees_all(dir * (need * 0.99), &b), "{dir}");
+        }
+        assert!(!single_sees_all(Vec3::ZERO, &b));
+        assert!(!single_sees_all(Vec3::new(0.0, f32::INFINITY, 0.0), &b));
+        assert!(!single_sees_all(Vec3::new(f32::NAN, 0.0, 9.0), &b));
+        // Every corner of the box is then inside the view's frustum, past its near plane.
+        let eye = Vec3::new(1.0, 2.0, -2.0).normalize() * (need * 1.01);
+        let v = &ViewSet::single(Some(eye), &b, 16).views[0];
+        for c in corners(&b) {
+            let p = v.to_view(c);
+            assert!(
+                p[2] > v.near && p[0].abs() < p[2] && p[1].abs() < p[2],
+                "{c}: {p:?}"
+            );
         }
     }
 
