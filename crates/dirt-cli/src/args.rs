@@ -141,7 +141,36 @@ impl AdsArgs {
             return Ok((base, None));
         }
         let start = std::time::Instant::now();
-        let cands: Vec<AdsParams> = dirt_cpu::cost::candidates(&base, !g.views)
+        // Rays that all start at one point (a camera's): the views placed
+        // there, each exact for every ray, of the views given if any.
+        let origin = match (base.center, sample) {
+            (None, Some(rays)) => dirt_cpu::cost::common_origin(rays),
+            _ => None,
+        };
+        let placed: Vec<AdsParams> = origin
+            .map(|o| {
+                let bounds = dirt_math::Aabb::of_triangles(&scene.triangles);
+                dirt_cpu::cost::candidates_at(o, &bounds)
+            })
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|c| !g.views || c.views == base.views)
+            .collect();
+        let at = match origin {
+            Some(o) if !placed.is_empty() => {
+                format!(
+                    ", placed at the rays' common origin {},{},{}",
+                    o.x, o.y, o.z
+                )
+            }
+            _ => String::new(),
+        };
+        let raw = if placed.is_empty() {
+            dirt_cpu::cost::candidates(&base, !g.views)
+        } else {
+            placed
+        };
+        let cands: Vec<AdsParams> = raw
             .into_iter()
             .map(|c| AdsParams {
                 resolution: if g.resolution {
@@ -180,7 +209,7 @@ impl AdsArgs {
         }
         let best = choice.best.params;
         eprintln!(
-            "ads: {} views, resolution {}, B {}, S {}: the cost model's cheapest predicted frame of {rays_per_frame} rays ({} of {} candidates built, {} pruned; choosing took {:.1} ms; --fixed for cube 128 B8 S1)",
+            "ads: {} views, resolution {}, B {}, S {}{at}: the cost model's cheapest predicted frame of {rays_per_frame} rays ({} of {} candidates built, {} pruned; choosing took {:.1} ms; --fixed for cube 128 B8 S1)",
             best.views,
             best.resolution,
             best.buckets,

@@ -971,6 +971,56 @@ fn auto_keeps_given_options_and_the_hits() {
     assert!(!out.status.success());
 }
 
+// Camera rays all start at the eye: the cost model's candidates are then the
+// views placed there, and the hits are still brute force's, byte for byte.
+#[test]
+fn camera_rays_place_the_views_at_their_origin() {
+    let dir = TestDir::new("origin");
+    let rays = dir.path("camera.npy");
+    dirt_ok(&[
+        "rays",
+        "spheres",
+        "--kind",
+        "camera",
+        "--count",
+        "3000",
+        "--out",
+        s(&rays),
+    ]);
+    let (a, b) = (dir.path("placed.npy"), dir.path("brute.npy"));
+    let (_, err) = dirt_ok(&["trace", "spheres", "--rays", s(&rays), "--out", s(&a)]);
+    assert!(err.contains("placed at the rays' common origin"), "{err}");
+    dirt_ok(&[
+        "trace",
+        "spheres",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&b),
+        "--backend",
+        "brute",
+    ]);
+    assert_eq!(
+        std::fs::read(&a).expect("read"),
+        std::fs::read(&b).expect("read")
+    );
+    // A given centre is kept; rays from many points are not placed.
+    let mixed = dir.path("mixed.npy");
+    write_rays(&mixed, 1000, 3);
+    for args in [
+        vec!["trace", "spheres", "--rays", s(&rays), "--center", "0,0,0"],
+        vec!["trace", "spheres", "--rays", s(&mixed)],
+    ] {
+        let mut args = args;
+        args.extend(["--out", s(&a)]);
+        let (_, err) = dirt_ok(&args);
+        assert!(
+            err.contains("ads: ") && !err.contains("common origin"),
+            "{err}"
+        );
+    }
+}
+
 // The evaluation's peers trace the same files, so whole processes can be
 // compared. Their own triangle tests agree with brute force on the primitive
 // for most rays, not all: the mixed rays aim at vertices and shared edges, where
