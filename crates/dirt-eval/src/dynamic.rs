@@ -46,6 +46,11 @@ impl DynamicConfig {
 /// The dynamic rows' backend name of DIRT at the fixed default setting.
 pub const FIXED: &str = "dirt-cpu cube r128 B8 S1";
 
+/// The dynamic rows' backend name of DIRT's default told where the rays start
+/// (the camera's eye, [`DirtCpu::with_origin`]) and given frame 0's rays as
+/// its sample ([`DirtCpu::with_sample`]).
+pub const AT_CAMERA: &str = "dirt-cpu at the camera";
+
 /// The animated models of Debian's `assimp-testmodels` measured beside the grid.
 pub const ANIMATED_ASSETS: [&str; 2] = [
     "/usr/share/assimp/models/glTF2/simple_skin/simple_skin.gltf",
@@ -251,6 +256,15 @@ fn run_with(
             cam = Some(Camera::in_front_of(&b, b.extent().length().max(1e-3)));
         }
         let rays: Vec<Ray> = rays::generate(&tris, cam, RayKind::Camera, ray_count, seed)?;
+        if frame == 0
+            && let Some(c) = cam
+        {
+            // An application knows its camera: the default told so, beside the default.
+            let t = DirtCpu::auto(None, ray_count as u64)
+                .with_origin(c.eye)
+                .with_sample(&rays);
+            entries.insert(1, dirt(AT_CAMERA, t));
+        }
         let n = TRUTH_RAYS.min(rays.len());
         let truth = dirt_cpu::brute_force::trace(&tris, &rays[..n]);
         for e in entries.iter_mut().filter(|e| !e.skipped) {
