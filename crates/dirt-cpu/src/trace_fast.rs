@@ -56,7 +56,8 @@
 //! - A ray's set-up in every view (its view-space ray and its interval in the
 //!   view's frustum) is computed for all views at once, one lane a view
 //!   ([`ViewLanes`]), from the views' constants laid side by side once per
-//!   `trace` call.
+//!   `trace` call; as many lanes as the set has views, rounded up to 1, 4
+//!   or 8 (a single view is one lane, not eight).
 //!
 //! [`HiZCell::clip`]: dirt_math::dda::HiZCell::clip
 
@@ -184,25 +185,43 @@ impl ViewLanes {
         [Interval; MAX_VIEWS],
         [Option<usize>; MAX_VIEWS],
     ) {
+        // As few lanes as hold the views: a single view's set-up is one lane.
+        match self.n {
+            1 => self.enter_lanes::<1>(ray),
+            2..=4 => self.enter_lanes::<4>(ray),
+            _ => self.enter_lanes::<VIEW_LANES>(ray),
+        }
+    }
+
+    /// [`ViewLanes::enter`] on the first `N` lanes (`n <= N <= VIEW_LANES`).
+    #[inline]
+    fn enter_lanes<const N: usize>(
+        &self,
+        ray: &Ray,
+    ) -> (
+        [ViewRay; MAX_VIEWS],
+        [Interval; MAX_VIEWS],
+        [Option<usize>; MAX_VIEWS],
+    ) {
         let (org, dir) = (ray.origin(), ray.dir());
-        let q: [Lanes; 3] = from_fn(|c| from_fn(|k| org[c] - self.apex[c][k]));
+        let q: [[f32; N]; 3] = from_fn(|c| from_fn(|k| org[c] - self.apex[c][k]));
         let dw = [dir.x, dir.y, dir.z];
         // dirt_math::view::dot3 of each axis, in its order.
         let ax = &self.axes;
-        let o: [Lanes; 3] = from_fn(|r| {
+        let o: [[f32; N]; 3] = from_fn(|r| {
             from_fn(|k| q[0][k] * ax[r][0][k] + q[1][k] * ax[r][1][k] + q[2][k] * ax[r][2][k])
         });
-        let d: [Lanes; 3] = from_fn(|r| {
+        let d: [[f32; N]; 3] = from_fn(|r| {
             from_fn(|k| dw[0] * ax[r][0][k] + dw[1] * ax[r][1][k] + dw[2] * ax[r][2][k])
         });
-        let eps: Lanes = from_fn(|k| {
+        let eps: [f32; N] = from_fn(|k| {
             let m = fmax(fmax(o[0][k].abs(), o[1][k].abs()), o[2][k].abs());
             EPS_RAY_REL * (m + 2.0 * self.scale[k])
         });
         // dirt_math::clip::view_frustum: Lo x (s = -tan), Hi x (tan), Lo y, Hi y, Near, Far.
-        let neg: Lanes = from_fn(|k| -self.tan[k]);
-        let tan = self.tan;
-        let parts: [(Lanes, Lanes); 6] = [
+        let neg: [f32; N] = from_fn(|k| -self.tan[k]);
+        let tan: [f32; N] = from_fn(|k| self.tan[k]);
+        let parts: [([f32; N], [f32; N]); 6] = [
             (
                 from_fn(|k| o[0][k] - neg[k] * o[2][k] + eps[k]),
                 from_fn(|k| d[0][k] - neg[k] * d[2][k]),
@@ -226,7 +245,7 @@ impl ViewLanes {
             ),
         ];
         // A loop, not `parts.map`: the map's closure was left out of line.
-        let mut cuts = [([0.0; VIEW_LANES], [0.0; VIEW_LANES]); 6];
+        let mut cuts = [([0.0; N], [0.0; N]); 6];
         for (cut, (f0, f1)) in cuts.iter_mut().zip(&parts) {
             *cut = cuts_of(*f0, *f1);
         }
