@@ -190,7 +190,8 @@ fn views_from_bounds() {
                 fwd = scale3(d, rcp);
             }
             apex = eye;
-            near = near_distance(eye, lo, hi);
+            // ViewSet::single: outside the bounding sphere, a near plane at half the clearance.
+            near = fmax(near_distance(eye, lo, hi), 0.5 * (length3(d) - r));
         }
         // The axes of ViewSet::single (exact for a unit axis: its products are 0 and ±1).
         var up_hint = vec3<f32>(0.0, 1.0, 0.0);

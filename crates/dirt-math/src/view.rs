@@ -331,7 +331,11 @@ impl ViewSet {
             }
             Some(e) => {
                 let f = (c - e).try_normalize().unwrap_or(Vec3::Z);
-                (e, f, near_distance(e, bounds))
+                // Outside the bounding sphere, no geometry is nearer than
+                // `|c − e| − r`: a near plane at half that keeps all of it and
+                // makes rays from the eye dilate less.
+                let clear = 0.5 * ((c - e).length() - r);
+                (e, f, fmax(near_distance(e, bounds), clear))
             }
         };
         let up_hint = if forward.y.abs() > 0.9 {
