@@ -89,6 +89,15 @@ pub fn left_out_views(
         .collect())
 }
 
+/// [`Aabb::of_triangles`] on all threads: the union of the parts' bounds is
+/// the sequential bounds exactly ([`Aabb::union`]).
+pub fn bounds_of(tris: &[Triangle]) -> Aabb {
+    use rayon::prelude::*;
+    tris.par_chunks(4096)
+        .map(Aabb::of_triangles)
+        .reduce(|| Aabb::EMPTY, |a, b| a.union(&b))
+}
+
 /// [`views_for`] without leaving out the views no triangle reaches: every
 /// view whose frustum meets the scene bounds is built (the papers'
 /// configuration; the baseline that leaving out is measured against).
@@ -98,12 +107,7 @@ pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, C
     if let Some(index) = tris.par_iter().position_first(|t| !t.is_finite()) {
         return Err(CoreError::NonFiniteTriangle { index });
     }
-    // On all threads: the union of the parts' bounds is the sequential
-    // bounds exactly (Aabb::union).
-    let mut bounds = tris
-        .par_chunks(4096)
-        .map(Aabb::of_triangles)
-        .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
+    let mut bounds = bounds_of(tris);
     if bounds.is_empty() {
         bounds = Aabb {
             min: Vec3::splat(-1.0),

@@ -7,8 +7,8 @@ use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
     Triangle, ViewsKind, check_lengths,
 };
+use dirt_math::Vec3;
 use dirt_math::view::single_sees_all;
-use dirt_math::{Aabb, Vec3};
 use web_time::Instant;
 
 /// Rays in the sample [`DirtCpu::auto`] measures candidates with.
@@ -196,7 +196,7 @@ impl Tracer for DirtCpu {
             )));
         }
         // Only a choice at an origin reads the bounds.
-        let bounds = || Aabb::of_triangles(tris);
+        let bounds = || dirt_core::bounds_of(tris);
         if self.auto.is_some() && self.params.center.is_some() {
             // A choice placed at the origin moves with it; a single view must
             // still see the whole scene from there, else the choice is made again.
