@@ -21,6 +21,9 @@ fn cpu_example() -> Result<(), Box<dyn Error>> {
     // build, and the faster traversal (None; Some(Traversal::HiZ) fixes it), timed on a
     // sample; DirtCpu::new(AdsParams { .. }, traversal) fixes every parameter instead.
     let mut dirt = DirtCpu::auto(None, 100_000);
+    // Where every ray traced in a frame starts at one point (camera rays), the next build
+    // places the views there and later builds move them with it; .with_origin(eye) says
+    // so from the first build, .with_sample(&rays) hands over rays like a frame's.
     dirt.build(&scene.triangles)?; // rebuild every frame for a moving scene
     let hits = dirt.trace(&rays)?;
     let truth = Brute::new(&scene.triangles).trace(&rays)?;

@@ -37,6 +37,21 @@ pub struct DirtCpu {
     origin: Option<Vec3>,
     /// Rays like a frame's, when the caller gives them ([`DirtCpu::with_sample`]).
     sample: Option<Vec<Ray>>,
+    /// Whether the caller said where the rays start ([`DirtCpu::set_origin`]);
+    /// otherwise [`DirtCpu::auto`] watches the rays it traces.
+    origin_given: bool,
+    /// What the traces since the last build showed (watching).
+    seen: Option<Seen>,
+    /// The traced rays the next choice is made on (watching).
+    seen_sample: Option<Vec<Ray>>,
+}
+
+/// The rays traced since the last build: the point they all start at, if
+/// they do, and a sample of the first batch.
+#[derive(Debug)]
+struct Seen {
+    origin: Option<Vec3>,
+    sample: Vec<Ray>,
 }
 
 impl DirtCpu {
@@ -54,6 +69,9 @@ impl DirtCpu {
             traversal_choice: None,
             origin: None,
             sample: None,
+            origin_given: false,
+            seen: None,
+            seen_sample: None,
         }
     }
 
@@ -79,12 +97,17 @@ impl DirtCpu {
     /// view from it when it sees the whole scene), measured on the sample of
     /// [`DirtCpu::set_sample`], else on rays from the origin
     /// ([`cost::sample_rays_from`]). Each of them is exact for every ray,
-    /// from anywhere, so a ray that starts elsewhere is still traced right. A choice placed at the origin follows it when
-    /// it moves (set it before each frame's build); a single view whose scene
+    /// from anywhere, so a ray that starts elsewhere is still traced right. A
+    /// choice placed at the origin follows it when it moves (set it before
+    /// each frame's build); a single view whose scene
     /// has grown out of its frustum, or whose origin is gone, is chosen again.
-    /// Without [`DirtCpu::auto`] the origin is not used.
+    /// Without [`DirtCpu::auto`] the origin is not used. Once it is set (to
+    /// `None` too), the tracer no longer watches the rays it traces for one
+    /// ([`DirtCpu::auto`]).
     pub fn set_origin(&mut self, origin: Option<Vec3>) {
         self.origin = origin;
+        self.origin_given = true;
+        self.seen = None;
     }
 
     /// [`DirtCpu::set_origin`] as a builder.
@@ -104,6 +127,15 @@ impl DirtCpu {
     /// through the chosen structure is measured too, on [`TRAVERSAL_SAMPLE`]
     /// rays of the same kind ([`cost::faster_traversal`]; inside `choose`);
     /// both give the same hits, so only time depends on that measurement.
+    ///
+    /// It watches the rays it traces, unless told where they start
+    /// ([`DirtCpu::set_origin`]): when every ray traced between two builds
+    /// starts at one point (a camera's primary rays), the next build places
+    /// the views there ([`cost::candidates_at`]) and later builds move them
+    /// with that point. Where the rays begin or stop sharing one point, the
+    /// cost model chooses again at the next build, on a sample of the rays
+    /// traced ([`DirtCpu::set_sample`] overrides it). Every choice is exact
+    /// for every ray.
     pub fn auto(traversal: Option<Traversal>, rays_per_frame: u64) -> Self {
         Self {
             auto: Some(rays_per_frame),
@@ -195,6 +227,17 @@ impl Tracer for DirtCpu {
                 "the rays' origin {o} is not finite"
             )));
         }
+        if self.auto.is_some()
+            && !self.origin_given
+            && let Some(seen) = self.seen.take()
+        {
+            // The rays began or stopped starting at one point: choose again, on them.
+            if seen.origin.is_some() != self.origin.is_some() {
+                self.choice = None;
+                self.seen_sample = Some(seen.sample);
+            }
+            self.origin = seen.origin;
+        }
         // Only a choice at an origin reads the bounds.
         let bounds = || dirt_core::bounds_of(tris);
         if self.auto.is_some() && self.params.center.is_some() {
@@ -221,7 +264,9 @@ impl Tracer for DirtCpu {
                 Some(o) => cost::candidates_at(o, &bounds()),
                 None => cost::candidates(&AdsParams::default(), true),
             };
-            let sample = match (&self.sample, self.origin) {
+            // The caller's rays, else those traced, else generated ones.
+            let given = self.sample.as_ref().or(self.seen_sample.as_ref());
+            let sample = match (given, self.origin) {
                 (Some(rays), _) => cost::stride_sample(rays, AUTO_SAMPLE),
                 (None, Some(o)) => cost::sample_rays_from(o, tris, AUTO_SAMPLE, 1),
                 (None, None) => cost::sample_rays(tris, AUTO_SAMPLE, 1),
@@ -249,7 +294,7 @@ impl Tracer for DirtCpu {
             };
             if self.measure_traversal {
                 let start = Instant::now();
-                let sample = match (&self.sample, self.origin) {
+                let sample = match (given, self.origin) {
                     (Some(rays), _) => rays.clone(),
                     (None, Some(o)) => cost::sample_rays_from(o, tris, TRAVERSAL_SAMPLE, 2),
                     (None, None) => cost::sample_rays(tris, TRAVERSAL_SAMPLE, 2),
@@ -259,6 +304,7 @@ impl Tracer for DirtCpu {
                 self.traversal_choice = Some(timed);
                 choose += start.elapsed();
             }
+            self.seen_sample = None;
             stages.push(("choose", choose));
             stages.extend(built_stages);
             return Ok(self.keep(ads, tris, stages));
@@ -280,6 +326,20 @@ impl Tracer for DirtCpu {
         })?;
         let with_stats = stats.is_some();
         trace_into(ads, &self.tris, rays, self.traversal, hits, stats);
+        if self.auto.is_some() && !self.origin_given && !rays.is_empty() {
+            // Watching: do all rays since the last build start at one point?
+            let origin = cost::common_origin(rays);
+            self.seen = Some(match self.seen.take() {
+                None => Seen {
+                    origin,
+                    sample: cost::stride_sample(rays, TRAVERSAL_SAMPLE),
+                },
+                Some(seen) => Seen {
+                    origin: origin.filter(|o| seen.origin == Some(*o)),
+                    sample: seen.sample,
+                },
+            });
+        }
         Ok(TraceReport {
             continuation_rounds: 0,
             stats: with_stats,

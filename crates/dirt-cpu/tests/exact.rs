@@ -299,3 +299,70 @@ fn auto_with_an_origin_weighs_views_there_and_follows_it() {
     let err = t.build(&tris).expect_err("a NaN origin");
     assert!(err.to_string().contains("not finite"), "{err}");
 }
+
+// DirtCpu::auto watches the rays it traces: once every ray of a frame starts
+// at one point, the next build chooses among views placed there, and later
+// builds move them with the point; rays from many points take it back to the
+// default placement. Exact throughout.
+#[test]
+fn auto_places_its_views_where_the_traced_rays_start() {
+    use dirt_core::Tracer;
+    use dirt_cpu::DirtCpu;
+    use dirt_cpu::brute_force::Brute;
+    let mut rng = Rng(23);
+    let tris = soup(300, &mut rng);
+    let mut brute = Brute::new(&tris);
+    let eye = Vec3::new(0.0, 0.5, 6.0);
+    let mut t = DirtCpu::auto(Some(Traversal::HiZ), 1_000_000);
+    let first = t.build(&tris).expect("build");
+    assert_eq!(first.stages.first().map(|s| s.0), Some("choose"));
+    assert_eq!(t.params.center, None);
+    let camera = rays_from(eye, 2000, &mut rng);
+    assert_eq!(
+        t.trace(&camera).expect("trace"),
+        brute.trace(&camera).expect("brute")
+    );
+    // Frame 1: every ray of frame 0 started at the eye.
+    let second = t.build(&tris).expect("build");
+    assert_eq!(second.stages.first().map(|s| s.0), Some("choose"));
+    assert_eq!(t.params.center, Some(eye));
+    let counted = t.choice().expect("a choice");
+    assert_eq!(counted.ranked.len() + counted.skipped, 36);
+    // The camera moves; this frame's rays come in two batches: the next
+    // build moves the views with it, unchosen.
+    let eye2 = Vec3::new(-1.0, 0.8, 5.5);
+    let moved = rays_from(eye2, 1000, &mut rng);
+    for half in moved.chunks(500) {
+        assert_eq!(
+            t.trace(half).expect("trace"),
+            brute.trace(half).expect("brute")
+        );
+    }
+    let third = t.build(&tris).expect("build");
+    assert!(
+        third.stages.iter().all(|s| s.0 != "choose"),
+        "{:?}",
+        third.stages
+    );
+    assert_eq!(t.params.center, Some(eye2));
+    assert_eq!(
+        t.trace(&moved).expect("trace"),
+        brute.trace(&moved).expect("brute")
+    );
+    // A batch from elsewhere among them: no common origin, chosen again as by default.
+    let mixed = rays(1000, &tris, &mut rng);
+    t.trace(&mixed).expect("trace");
+    let fourth = t.build(&tris).expect("build");
+    assert_eq!(fourth.stages.first().map(|s| s.0), Some("choose"));
+    assert_eq!(t.params.center, None);
+    assert_eq!(
+        t.trace(&mixed).expect("trace"),
+        brute.trace(&mixed).expect("brute")
+    );
+    // Told where the rays start (anywhere), it stops watching.
+    t.set_origin(None);
+    t.trace(&camera).expect("trace");
+    let fifth = t.build(&tris).expect("build");
+    assert!(fifth.stages.iter().all(|s| s.0 != "choose"));
+    assert_eq!(t.params.center, None);
+}

@@ -284,11 +284,9 @@ fn run_with(
                     source,
                 })?;
             let d = compare(&traced.hits, &truth, e.how);
-            if let Some(ms) = built.stage("choose")
-                && frame == 0
-            {
+            if let Some(ms) = built.stage("choose") {
                 notes.push(format!(
-                    "dynamic scene {name}, {} rays per frame: {} is the cost model's choice, made in frame 0's build ({} ms of its {} ms; later frames keep it)",
+                    "dynamic scene {name}, {} rays per frame: {} is the cost model's choice, made in frame {frame}'s build ({} ms of its {} ms; later frames keep it unless the rays begin or stop sharing an origin)",
                     rays.len(),
                     e.tracer.name(),
                     format_ms(ms),

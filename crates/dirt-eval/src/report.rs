@@ -347,7 +347,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         };
         let _ = writeln!(
             s,
-            "Fully dynamic scene ({what}; {frames} frames of rebuild + trace of {rays} camera rays; medians per frame; `dirt-cpu` is the library's default, `DirtCpu::auto`, whose choice is made in frame 0's build; `{}` is the same told where the rays start and given frame 0's rays to choose on, `DirtCpu::with_origin` and `with_sample`, so that it weighs views placed at the camera):\n",
+            "Fully dynamic scene ({what}; {frames} frames of rebuild + trace of {rays} camera rays; medians per frame; `dirt-cpu` is the library's default, `DirtCpu::auto`, whose choice is made in frame 0's build on generated rays and, once it has seen that every ray of frame 0 starts at the camera, made again in frame 1's build among the views placed there; `{}` is the same told where the rays start and given frame 0's rays to choose on from frame 0, `DirtCpu::with_origin` and `with_sample`):\n",
             crate::dynamic::AT_CAMERA
         );
         let _ = writeln!(
