@@ -48,9 +48,10 @@
 //!   list does not depend on the order its triangles are tested in. Two or
 //!   three left over are one more group, a triangle repeated in the spare
 //!   lanes (testing a candidate twice changes no hit).
-//! - Batches of [`ORDER_MIN_RAYS`] rays or more are traced in a coherent
-//!   order ([`coherent_order`]: direction face, then Morton code of the
-//!   origin); the results go back to input order.
+//! - Batches of [`ORDER_MIN_RAYS`] rays or more that do not all start at one
+//!   point are traced in a coherent order ([`coherent_order`]: direction
+//!   face, then Morton code of the origin); the results go back to input
+//!   order. Rays from one point (a camera's) keep their own order.
 //! - Tile boundary slopes ([`View::boundary`]) come from a table made once per
 //!   `trace` call.
 //! - A ray's set-up in every view (its view-space ray and its interval in the
@@ -466,7 +467,8 @@ fn spread3(x: u32) -> u32 {
 /// cube face their direction points to (axis and sign of its largest
 /// component), then by the Morton code of their origin (9 bits an axis over
 /// the origins' bounds), then by index. Each entry is `key << 32 | index`.
-/// `None` for batches too small to be worth it. The order changes only the
+/// `None` for batches too small to be worth it, and for rays that all start
+/// at one point (input order). The order changes only the
 /// speed: each ray is traced on its own.
 pub(crate) fn coherent_order(rays: &[Ray]) -> Option<Vec<u64>> {
     use rayon::prelude::*;
@@ -491,6 +493,12 @@ pub(crate) fn coherent_order(rays: &[Ray]) -> Option<Vec<u64>> {
             || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
             |(a, b), (c, d)| (from_fn(|k| a[k].min(c[k])), from_fn(|k| b[k].max(d[k]))),
         );
+    // Rays that all start at one point (a camera's) differ only in their
+    // direction face: in input order they are as coherent as a sort makes
+    // them, and the sort, gather and scatter would cost more than they save.
+    if lo == hi {
+        return None;
+    }
     // 9 bits an axis; NaN (empty or flat bounds, non-finite origins) goes to 0.
     let scale: [f32; 3] = from_fn(|a| 511.0 / (hi[a] - lo[a]));
     let cell = |r: &Ray, a: usize| ((r.origin[a] - lo[a]) * scale[a]).clamp(0.0, 511.0) as u32;
@@ -1027,6 +1035,19 @@ mod tests {
         seen.sort_unstable();
         assert!(seen.iter().copied().eq(0..rays.len()));
         assert!(coherent_order(&rays[..100]).is_none());
+        // Rays from one point (NaN origins aside) stay in input order.
+        let eye: Vec<Ray> = rays
+            .iter()
+            .map(|r| {
+                let o = if r.origin[0].is_nan() {
+                    r.origin()
+                } else {
+                    Vec3::new(0.5, 1.0, 2.0)
+                };
+                Ray::new(o, r.dir(), 0.0, 1.0)
+            })
+            .collect();
+        assert!(coherent_order(&eye).is_none());
     }
     use dirt_math::clip::clip_ray_to_view;
     use dirt_math::{Aabb, Vec3, ViewSet};
