@@ -154,6 +154,14 @@ struct ViewLanes {
     has_content: [bool; VIEW_LANES],
 }
 
+/// A ray's set-up in every view ([`ViewLanes::enter`]): its view-space ray,
+/// its interval in the view's frustum, and the side it leaves through (0..4).
+type Entered = (
+    [ViewRay; MAX_VIEWS],
+    [Interval; MAX_VIEWS],
+    [Option<usize>; MAX_VIEWS],
+);
+
 impl ViewLanes {
     fn new(views: &[View]) -> Self {
         // Scene::new takes at most MAX_VIEWS views.
@@ -178,14 +186,7 @@ impl ViewLanes {
     /// `tmax` (its six half-spaces as cuts, applied in its order): the same
     /// operations on the same operands, as lanes.
     #[inline]
-    fn enter(
-        &self,
-        ray: &Ray,
-    ) -> (
-        [ViewRay; MAX_VIEWS],
-        [Interval; MAX_VIEWS],
-        [Option<usize>; MAX_VIEWS],
-    ) {
+    fn enter(&self, ray: &Ray) -> Entered {
         // As few lanes as hold the views: a single view's set-up is one lane.
         match self.n {
             1 => self.enter_lanes::<1>(ray),
@@ -196,14 +197,7 @@ impl ViewLanes {
 
     /// [`ViewLanes::enter`] on the first `N` lanes (`n <= N <= VIEW_LANES`).
     #[inline]
-    fn enter_lanes<const N: usize>(
-        &self,
-        ray: &Ray,
-    ) -> (
-        [ViewRay; MAX_VIEWS],
-        [Interval; MAX_VIEWS],
-        [Option<usize>; MAX_VIEWS],
-    ) {
+    fn enter_lanes<const N: usize>(&self, ray: &Ray) -> Entered {
         let (org, dir) = (ray.origin(), ray.dir());
         let q: [[f32; N]; 3] = from_fn(|c| from_fn(|k| org[c] - self.apex[c][k]));
         let dw = [dir.x, dir.y, dir.z];
