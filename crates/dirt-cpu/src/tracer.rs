@@ -99,10 +99,10 @@ impl DirtCpu {
     /// ([`cost::sample_rays_from`]). Each of them is exact for every ray,
     /// from anywhere, so a ray that starts elsewhere is still traced right. A
     /// choice placed at the origin follows it when it moves (set it before
-    /// each frame's build); a single view whose scene
-    /// has grown out of its frustum, or whose origin is gone, is chosen again.
-    /// Without [`DirtCpu::auto`] the origin is not used. Once it is set (to
-    /// `None` too), the tracer no longer watches the rays it traces for one
+    /// each frame's build); a single view whose scene has grown out of its
+    /// frustum, or whose origin is gone, is chosen again. Without
+    /// [`DirtCpu::auto`] the origin is not used. Once it is set (to `None`
+    /// too), the tracer no longer watches the rays it traces for one
     /// ([`DirtCpu::auto`]).
     pub fn set_origin(&mut self, origin: Option<Vec3>) {
         self.origin = origin;
