@@ -184,8 +184,9 @@ impl ViewLanes {
     /// For every view, [`View::ray`] and, for views with content,
     /// [`clip_ray_to_view`](dirt_math::clip::clip_ray_to_view) from `tmin` to
     /// `tmax` (its six half-spaces as cuts, applied in its order): the same
-    /// operations on the same operands, as lanes.
-    #[inline]
+    /// operations on the same operands, as lanes. Always inlined: its
+    /// arrays are then written where the caller keeps them, not copied there.
+    #[inline(always)]
     fn enter(&self, ray: &Ray) -> Entered {
         // As few lanes as hold the views: a single view's set-up is one lane.
         match self.n {
@@ -196,7 +197,7 @@ impl ViewLanes {
     }
 
     /// [`ViewLanes::enter`] on the first `N` lanes (`n <= N <= VIEW_LANES`).
-    #[inline]
+    #[inline(always)]
     fn enter_lanes<const N: usize>(&self, ray: &Ray) -> Entered {
         let (org, dir) = (ray.origin(), ray.dir());
         let q: [[f32; N]; 3] = from_fn(|c| from_fn(|k| org[c] - self.apex[c][k]));
