@@ -95,8 +95,16 @@ pub fn fill_depth_keeping(
             for t in piece {
                 for_each_fragment(views, t, |tile, lo, hi| {
                     let e = &bounds[tile];
-                    e[0].fetch_min(f32_to_ordered(lo), Ordering::Relaxed);
-                    e[1].fetch_max(f32_to_ordered(hi), Ordering::Relaxed);
+                    // A locked update only where it changes the bound: most
+                    // fragments of a tile after its first do not (x86 has no
+                    // atomic min or max, so each is a compare-exchange loop).
+                    let (zlo, zhi) = (f32_to_ordered(lo), f32_to_ordered(hi));
+                    if zlo < e[0].load(Ordering::Relaxed) {
+                        e[0].fetch_min(zlo, Ordering::Relaxed);
+                    }
+                    if zhi > e[1].load(Ordering::Relaxed) {
+                        e[1].fetch_max(zhi, Ordering::Relaxed);
+                    }
                     if keep {
                         if found.len() < room {
                             found.push((tile as u32, lo, hi));
