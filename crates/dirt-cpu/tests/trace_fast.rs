@@ -128,3 +128,44 @@ fn large_batches_in_coherent_order_are_the_plain_stage() {
         }
     }
 }
+
+// Rays from the views' own centre (a camera's eye, where `DirtCpu` places
+// them for primary rays): most of them miss the sparse scene, and the linear
+// walk of such a ray is left out when no cell near it holds anything at its
+// depths. The hits must stay the plain stage's, on small and large grids.
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    #[test]
+    fn rays_from_the_views_centre_are_the_plain_stage(
+        seed in any::<u64>(),
+        n in 1usize..60,
+        resolution in prop_oneof![Just(8u32), Just(37), Just(128), Just(256)],
+        single in any::<bool>(),
+    ) {
+        let mut rng = Rng(seed);
+        let tris = scene(n, &mut rng);
+        // Outside the scene for the single view (which must see all of it), inside for the cube.
+        let eye = if single { Vec3::new(0.2, 1.5, 6.0) } else { Vec3::new(0.1, 0.3, -0.2) };
+        let p = AdsParams {
+            views: if single { ViewsKind::Single } else { ViewsKind::Cube },
+            resolution,
+            buckets: 4,
+            tile: 1,
+            center: Some(eye),
+        };
+        let ads = Ads::build(&tris, &p).expect("valid parameters");
+        let rs: Vec<Ray> = (0..400)
+            .map(|k| {
+                // Towards a triangle's corner (a hit or a near miss), or anywhere.
+                let d = if k % 2 == 0 {
+                    tris[rng.below(tris.len())].vertex(k % 3) + rng.v(0.05) - eye
+                } else {
+                    rng.v(1.0)
+                };
+                Ray::new(eye, d, 0.0, f32::INFINITY)
+            })
+            .collect();
+        check(&ads, &tris, &rs, &format!("{p:?}"))?;
+    }
+}
