@@ -38,10 +38,16 @@
 //!   this one.
 //! - Without statistics, a short linear walk that could only reach cells
 //!   whose depth bounds its depth span misses is left out
-//!   ([`RayState::walk_meets_nothing`], on at most four Hi-Z cells): it would
+//!   ([`RayState::meets_nothing`], on at most four Hi-Z cells): it would
 //!   test no triangle. Camera rays from a view's apex that miss the scene
 //!   end there (the deforming grid's misses, 100,000 camera rays: 4.9 ms →
 //!   4.1 ms). With statistics the walk is made, as the plain stage counts it.
+//! - Without statistics, the Hi-Z walk starts at the (at most 2 × 2) cells
+//!   of the lowest level that hold every tile the ray can reach ([`reach`]),
+//!   not at the root. A cell's interval and depth test do not depend on its
+//!   parent, so every cell the plain walk visits below that level is still
+//!   visited; the ancestors' tests could only drop more. Extra candidates
+//!   change no hit. With statistics the walk starts at the root.
 //! - Without statistics, a triangle already tested by this ray is not
 //!   tested again (a mailbox of recent ids per thread, [`MAILBOX`] entries
 //!   tagged with the ray): a triangle listed in several tiles and buckets
@@ -448,7 +454,65 @@ fn depth_span(vr: &ViewRay, iv: Interval) -> (f32, f32) {
     (fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps)
 }
 
-/// Bands of a walk short enough for [`RayState::walk_meets_nothing`] to be tried.
+/// The tiles a walk of a ray's interval in a view can reach, with a margin
+/// of one tile, and the ray's depth span over the interval ([`reach`]).
+#[derive(Clone, Copy, Debug)]
+struct Reach {
+    i: (u32, u32),
+    j: (u32, u32),
+    depth: (f32, f32),
+}
+
+impl Reach {
+    /// The lowest Hi-Z level (below `levels`) at which the tiles fit in 2 × 2 cells.
+    #[inline]
+    fn level(&self, levels: u32) -> u32 {
+        let mut level = 0;
+        while level + 1 < levels
+            && ((self.i.1 >> level) - (self.i.0 >> level) > 1
+                || (self.j.1 >> level) - (self.j.0 >> level) > 1)
+        {
+            level += 1;
+        }
+        level
+    }
+}
+
+/// The tiles a walk of `iv` in `v` can reach: `dirt_math::dda::index_range`
+/// of the ray's tile coordinates `[ax, ay, bx, by]` at `iv`'s ends
+/// ([`tile_xy2`]) dilated by `delta`, grown by one tile; `None` where that
+/// is not shown to hold them all (then walk from the top).
+///
+/// Why it holds them: a tile the walk enters is one whose (dilated) frustum
+/// the ray crosses at some `t` in `iv`, where its tile coordinate is within
+/// the dilation of the tile. That coordinate, `(o + t·d) / z(t)`, is
+/// monotone in `t` where `z(t)` is positive and not clamped at `near / 2`
+/// (checked on the ends: the depth is the same expression, monotone in `t`
+/// in floats too), so it lies between its values at the ends, up to
+/// rounding far below the margin. Every tile's depth span is inside the
+/// span over `iv` likewise.
+#[inline]
+fn reach(
+    v: &View,
+    vr: &ViewRay,
+    iv: Interval,
+    [ax, ay, bx, by]: [f32; 4],
+    delta: f32,
+) -> Option<Reach> {
+    let (za, zb) = (ray_depth(vr, iv.t0), ray_depth(vr, iv.t1));
+    if !(fmin(za, zb) > v.near * 0.5) {
+        return None;
+    }
+    let last = v.tiles - 1;
+    let grow = |(lo, hi): (u32, u32)| (lo.saturating_sub(1), (hi + 1).min(last));
+    Some(Reach {
+        i: grow(index_range(ax, bx, delta, v.tiles)?),
+        j: grow(index_range(ay, by, delta, v.tiles)?),
+        depth: (fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps),
+    })
+}
+
+/// Bands of a walk short enough for [`RayState::meets_nothing`] to be tried.
 const SHORT_WALK: u32 = 4;
 
 /// Bands of the linear walk prepared together.
@@ -672,7 +736,7 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         // with something in it, and then the test is time lost.
         if !STATS
             && k1 - k0 < SHORT_WALK
-            && self.walk_meets_nothing(v, vr, iv, [a, b], delta, major, (k0, k1))
+            && reach(v, vr, iv, [ax, ay, bx, by], delta).is_some_and(|r| self.meets_nothing(v, &r))
         {
             return;
         }
@@ -775,66 +839,22 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         }
     }
 
-    /// Whether the linear walk of `iv` in `v` would find no tile whose depth
-    /// bounds meet the ray's depth span there, so no triangle to test: then
-    /// the walk can be left out, which changes no hit (only the statistics,
-    /// which is why it is not done when they are counted). Decided on at
-    /// most four cells of the Hi-Z level at which the walk's tiles, with a
-    /// margin of one tile, fit in 2 × 2 cells. Camera rays from a view's
-    /// apex that miss everything mostly end here, after their set-up.
-    ///
-    /// Why the walk's tiles lie in that rectangle: the walk takes the bands
-    /// `k0..=k1` of the major axis; in each, the minor tiles are those of
-    /// the ray's minor tile coordinate at the ends of a sub-interval of
-    /// `iv`, dilated by `delta`. That coordinate, `(o + t·d) / z(t)`, is
-    /// monotone in `t` where `z(t)` is positive (and not clamped at
-    /// `near / 2`, which is checked), so it lies between its values at `iv`'s
-    /// ends up to rounding, far below the margin. Every tile's depth span is
-    /// inside the span over `iv` (`o + t·d` is monotone in `t` in floats
-    /// too), and a cell's bounds hold its tiles' bounds: a cell the span
-    /// misses has no tile the walk would search.
-    #[allow(clippy::too_many_arguments)]
+    /// Whether no tile of `r` has depth bounds that its depth span meets, so
+    /// that a walk inside `r` would test no triangle: then the walk can be
+    /// left out, which changes no hit (only the statistics, which is why it
+    /// is not done when they are counted). Decided on the at most four cells
+    /// of [`Reach::level`]: a cell's bounds hold its tiles' bounds. Camera
+    /// rays from a view's apex that miss everything mostly end here, after
+    /// their set-up.
     #[inline]
-    fn walk_meets_nothing(
-        &self,
-        v: &View,
-        vr: &ViewRay,
-        iv: Interval,
-        [a, b]: [[f32; 2]; 2],
-        delta: f32,
-        major: usize,
-        (k0, k1): (u32, u32),
-    ) -> bool {
-        let minor = 1 - major;
-        let (za, zb) = (ray_depth(vr, iv.t0), ray_depth(vr, iv.t1));
-        // The coordinate is a ratio only where the clamp stays off (the
-        // walk's depth is this same expression, monotone between the ends).
-        if !(fmin(za, zb) > v.near * 0.5) {
-            return false;
-        }
-        let Some((m0, m1)) = index_range(a[minor], b[minor], delta, v.tiles) else {
-            return false;
-        };
-        let last = v.tiles - 1;
-        let grow = |(lo, hi): (u32, u32)| (lo.saturating_sub(1), (hi + 1).min(last));
-        let ((k0, k1), (m0, m1)) = (grow((k0, k1)), grow((m0, m1)));
-        let ((i0, i1), (j0, j1)) = if major == 0 {
-            ((k0, k1), (m0, m1))
-        } else {
-            ((m0, m1), (k0, k1))
-        };
+    fn meets_nothing(&self, v: &View, r: &Reach) -> bool {
         let sc = self.sc;
-        let mut level = 0;
-        while level + 1 < sc.levels
-            && ((i1 >> level) - (i0 >> level) > 1 || (j1 >> level) - (j0 >> level) > 1)
-        {
-            level += 1;
-        }
-        let (dlo, dhi) = (fmin(za, zb) - vr.eps, fmax(za, zb) + vr.eps);
+        let level = r.level(sc.levels);
+        let (dlo, dhi) = r.depth;
         let w = sc.widths[level as usize];
         let cells = &sc.ads.hiz[level as usize][v.slot as usize * (w * w) as usize..];
-        for j in (j0 >> level)..=(j1 >> level) {
-            for i in (i0 >> level)..=(i1 >> level) {
+        for j in (r.j.0 >> level)..=(r.j.1 >> level) {
+            for i in (r.i.0 >> level)..=(r.i.1 >> level) {
                 let [zmin, zmax] = cells[(j * w + i) as usize];
                 if dhi >= ordered_to_f32(zmin) && dlo <= ordered_to_f32(zmax) {
                     return false;
@@ -894,16 +914,62 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         };
         // Cells waiting, each with its interval: `stack[..len]`.
         let mut len = 0;
-        // The root covers every tile: tiles [0, min(2^top, tiles)) = [0, tiles).
         let top = sc.levels - 1;
-        let root_hi = (1u32 << top).min(tiles);
-        let root = [lo(0, 0), hi(0, root_hi), lo(1, 0), hi(1, root_hi)];
-        let w = sc.widths[top as usize] as usize;
-        if let Some(civ) = enter(root, sc.ads.hiz[top as usize][slot * w * w]) {
-            self.scratch.x[top as usize][0] = (root[0], root[1]);
-            self.scratch.y[top as usize][0] = (root[2], root[3]);
-            self.scratch.stack[0] = (top, 0, 0, civ);
-            len = 1;
+        // Without statistics, the walk starts at the (at most 2 × 2) cells
+        // of the lowest level that hold every tile it can reach ([`reach`]),
+        // not at the root: the cells it would have found on the way down
+        // are still visited (a cell's interval and depth test do not depend
+        // on its parent), so the same tiles are searched, and perhaps a few
+        // more that the ancestors' tests would have dropped. More candidates
+        // change no hit; the statistics would differ, so with them the walk
+        // starts at the root, as the plain stage does.
+        let start = if STATS {
+            None
+        } else {
+            reach(v, vr, iv, [ax, ay, bx, by], dilation(v, vr, &iv))
+                .map(|r| (r.level(sc.levels), r))
+                .filter(|&(level, _)| level < top)
+        };
+        if let Some((level, r)) = start {
+            let l = level as usize;
+            let w = sc.widths[l];
+            // A cell's sides: its first tile's lower boundary, the next cell's (clamped).
+            let (ci, cj) = (
+                (r.i.0 >> level, r.i.1 >> level),
+                (r.j.0 >> level, r.j.1 >> level),
+            );
+            for c in [ci.0, ci.1] {
+                self.scratch.x[l][(c & 1) as usize] =
+                    (lo(0, c << level), hi(0, ((c + 1) << level).min(tiles)));
+            }
+            for c in [cj.0, cj.1] {
+                self.scratch.y[l][(c & 1) as usize] =
+                    (lo(1, c << level), hi(1, ((c + 1) << level).min(tiles)));
+            }
+            for &(di, dj) in order.iter().rev() {
+                let (i, j) = (ci.0 + di, cj.0 + dj);
+                if i > ci.1 || j > cj.1 {
+                    continue;
+                }
+                let (xl, xh) = self.scratch.x[l][(i & 1) as usize];
+                let (yl, yh) = self.scratch.y[l][(j & 1) as usize];
+                let cell = sc.ads.hiz[l][slot * (w * w) as usize + (j * w + i) as usize];
+                if let Some(civ) = enter([xl, xh, yl, yh], cell) {
+                    self.scratch.stack[len] = (level, i, j, civ);
+                    len += 1;
+                }
+            }
+        } else {
+            // The root covers every tile: tiles [0, min(2^top, tiles)) = [0, tiles).
+            let root_hi = (1u32 << top).min(tiles);
+            let root = [lo(0, 0), hi(0, root_hi), lo(1, 0), hi(1, root_hi)];
+            let w = sc.widths[top as usize] as usize;
+            if let Some(civ) = enter(root, sc.ads.hiz[top as usize][slot * w * w]) {
+                self.scratch.x[top as usize][0] = (root[0], root[1]);
+                self.scratch.y[top as usize][0] = (root[2], root[3]);
+                self.scratch.stack[0] = (top, 0, 0, civ);
+                len = 1;
+            }
         }
         while len > 0 {
             len -= 1;
