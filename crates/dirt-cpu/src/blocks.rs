@@ -99,6 +99,11 @@ impl<T: Copy> Groups<T> {
         self.ends.shrink_to_fit();
     }
 
+    /// Every item, in order, without its group.
+    pub(crate) fn items(&self) -> impl Iterator<Item = &T> {
+        self.items.blocks.iter().flatten()
+    }
+
     /// Calls `item(state, group, x)` for every item of every closed group, in
     /// order, and `end(state, group)` after each group's items (empty groups
     /// included); `state` is what both may change. A walk over the blocks'
@@ -161,13 +166,30 @@ impl Budget {
 
     /// Charges a piece's `groups` to the budget: kept (trimmed) when `wanted`
     /// and they fit in what was left, else dropped.
-    pub(crate) fn settle<T: Copy>(&self, mut groups: Groups<T>, wanted: bool) -> Option<Groups<T>> {
-        let n = groups.len();
-        let before = self.used.fetch_add(n, Ordering::Relaxed);
-        (wanted && before.saturating_add(n) <= self.max).then(|| {
+    pub(crate) fn settle<T: Copy>(&self, groups: Groups<T>, wanted: bool) -> Option<Groups<T>> {
+        if wanted {
+            self.keep(groups).ok()
+        } else {
+            self.charge(groups.len());
+            None
+        }
+    }
+
+    /// [`Budget::settle`] of wanted groups, giving them back when they do
+    /// not fit (for the caller's last use before they are dropped).
+    pub(crate) fn keep<T: Copy>(&self, mut groups: Groups<T>) -> Result<Groups<T>, Groups<T>> {
+        if self.charge(groups.len()) {
             groups.trim();
-            groups
-        })
+            Ok(groups)
+        } else {
+            Err(groups)
+        }
+    }
+
+    /// Charges `n` items; whether they fit in what was left.
+    fn charge(&self, n: usize) -> bool {
+        let before = self.used.fetch_add(n, Ordering::Relaxed);
+        before.saturating_add(n) <= self.max
     }
 }
 
