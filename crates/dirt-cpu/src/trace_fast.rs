@@ -923,52 +923,43 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         // more that the ancestors' tests would have dropped. More candidates
         // change no hit; the statistics would differ, so with them the walk
         // starts at the root, as the plain stage does.
-        let start = if STATS {
+        let reached = if STATS {
             None
         } else {
             reach(v, vr, iv, [ax, ay, bx, by], dilation(v, vr, &iv))
-                .map(|r| (r.level(sc.levels), r))
-                .filter(|&(level, _)| level < top)
         };
-        if let Some((level, r)) = start {
-            let l = level as usize;
-            let w = sc.widths[l];
-            // A cell's sides: its first tile's lower boundary, the next cell's (clamped).
-            let (ci, cj) = (
-                (r.i.0 >> level, r.i.1 >> level),
-                (r.j.0 >> level, r.j.1 >> level),
-            );
-            for c in [ci.0, ci.1] {
-                self.scratch.x[l][(c & 1) as usize] =
-                    (lo(0, c << level), hi(0, ((c + 1) << level).min(tiles)));
+        // The root, cell (0, 0) of the top level, covers every tile.
+        let (level, ci, cj) = match reached {
+            Some(r) => {
+                let level = r.level(sc.levels);
+                let cells = |(lo, hi): (u32, u32)| (lo >> level, hi >> level);
+                (level, cells(r.i), cells(r.j))
             }
-            for c in [cj.0, cj.1] {
-                self.scratch.y[l][(c & 1) as usize] =
-                    (lo(1, c << level), hi(1, ((c + 1) << level).min(tiles)));
+            None => (top, (0, 0), (0, 0)),
+        };
+        let l = level as usize;
+        let w = sc.widths[l];
+        // A cell's sides: its first tile's lower boundary, the next cell's
+        // (clamped to the grid: the root's is [0, min(2^top, tiles))).
+        for c in [ci.0, ci.1] {
+            self.scratch.x[l][(c & 1) as usize] =
+                (lo(0, c << level), hi(0, ((c + 1) << level).min(tiles)));
+        }
+        for c in [cj.0, cj.1] {
+            self.scratch.y[l][(c & 1) as usize] =
+                (lo(1, c << level), hi(1, ((c + 1) << level).min(tiles)));
+        }
+        for &(di, dj) in order.iter().rev() {
+            let (i, j) = (ci.0 + di, cj.0 + dj);
+            if i > ci.1 || j > cj.1 {
+                continue;
             }
-            for &(di, dj) in order.iter().rev() {
-                let (i, j) = (ci.0 + di, cj.0 + dj);
-                if i > ci.1 || j > cj.1 {
-                    continue;
-                }
-                let (xl, xh) = self.scratch.x[l][(i & 1) as usize];
-                let (yl, yh) = self.scratch.y[l][(j & 1) as usize];
-                let cell = sc.ads.hiz[l][slot * (w * w) as usize + (j * w + i) as usize];
-                if let Some(civ) = enter([xl, xh, yl, yh], cell) {
-                    self.scratch.stack[len] = (level, i, j, civ);
-                    len += 1;
-                }
-            }
-        } else {
-            // The root covers every tile: tiles [0, min(2^top, tiles)) = [0, tiles).
-            let root_hi = (1u32 << top).min(tiles);
-            let root = [lo(0, 0), hi(0, root_hi), lo(1, 0), hi(1, root_hi)];
-            let w = sc.widths[top as usize] as usize;
-            if let Some(civ) = enter(root, sc.ads.hiz[top as usize][slot * w * w]) {
-                self.scratch.x[top as usize][0] = (root[0], root[1]);
-                self.scratch.y[top as usize][0] = (root[2], root[3]);
-                self.scratch.stack[0] = (top, 0, 0, civ);
-                len = 1;
+            let (xl, xh) = self.scratch.x[l][(i & 1) as usize];
+            let (yl, yh) = self.scratch.y[l][(j & 1) as usize];
+            let cell = sc.ads.hiz[l][slot * (w * w) as usize + (j * w + i) as usize];
+            if let Some(civ) = enter([xl, xh, yl, yh], cell) {
+                self.scratch.stack[len] = (level, i, j, civ);
+                len += 1;
             }
         }
         while len > 0 {
