@@ -224,6 +224,7 @@ pub fn param_matrix(resolution: u32) -> Vec<AdsParams> {
                     buckets,
                     tile,
                     center: None,
+                    axis: None,
                 });
             }
         }
@@ -359,6 +360,7 @@ pub fn robust_matrix(resolution: u32, center: Option<Vec3>) -> Vec<AdsParams> {
                 } else {
                     None
                 },
+                axis: None,
             });
         }
     }

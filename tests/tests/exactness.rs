@@ -50,6 +50,7 @@ fn single_view_inside_the_scene_reports_what_it_sees() {
                 buckets: 8,
                 tile: 2,
                 center: Some(eye),
+                axis: None,
             },
         )
         .expect("build");

@@ -106,6 +106,7 @@ fn params_strategy() -> impl Strategy<Value = AdsParams> {
             buckets,
             tile: if res % tile == 0 { tile } else { 1 },
             center: None,
+            axis: None,
         })
 }
 
@@ -131,6 +132,7 @@ fn builtin_scenes_gpu_equals_cpu() {
                 buckets: 8,
                 tile: 2,
                 center: None,
+                axis: None,
             };
             compare(&scene.triangles, &rays, &params, 100).expect("gpu == cpu");
         }
@@ -177,6 +179,7 @@ fn rays_over_the_gpu_work_budget_are_continued_exactly() {
         buckets: 1,
         tile: 1,
         center: None,
+        axis: None,
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
     let ads = GpuAds::build(g, &tris, &params).expect("gpu build");
@@ -204,6 +207,34 @@ fn rays_over_the_gpu_work_budget_are_continued_exactly() {
     );
 }
 
+/// Orthographic views are built on the CPU backend only: the GPU refuses
+/// them, by name, on the host build and on a frame structure alike.
+#[test]
+fn orthographic_views_are_refused_with_a_clear_error() {
+    let Some(g) = any_gpu("orthographic_views_are_refused_with_a_clear_error") else {
+        return;
+    };
+    let tris = random_scene(1, 10, 1.0);
+    for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
+        let params = AdsParams {
+            views,
+            resolution: 16,
+            buckets: 4,
+            ..AdsParams::default()
+        };
+        for e in [
+            GpuAds::build(g, &tris, &params).expect_err("refused"),
+            GpuAds::frame(g, &params, 16).expect_err("refused"),
+        ] {
+            assert!(
+                matches!(e, dirt_gpu::GpuError::NotOnGpu(v) if v == views),
+                "{e}"
+            );
+            assert!(e.to_string().contains("CPU backend only"), "{e}");
+        }
+    }
+}
+
 /// A structure larger than every binding of the device together is refused
 /// before any work, by name, with the sizes in the message: never truncated.
 #[test]
@@ -218,6 +249,7 @@ fn oversized_structure_is_a_clear_error() {
         buckets: 64,
         tile: 1,
         center: None,
+        axis: None,
     };
     // 6·2048²·64 + 1 offsets: 6 GiB, beyond any device's offset bindings.
     let e = GpuAds::build(g, &tris, &params).expect_err("refused");

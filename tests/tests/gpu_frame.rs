@@ -237,6 +237,7 @@ fn params_strategy() -> impl Strategy<Value = AdsParams> {
             buckets,
             tile: 1,
             center: center.map(|(x, y, z)| Vec3::new(x, y, z)),
+            axis: None,
         })
 }
 
@@ -274,6 +275,7 @@ fn builtin_scenes_built_in_a_frame_equal_the_cpu() {
                 buckets: 4,
                 tile: 1,
                 center: None,
+                axis: None,
             };
             check_frame(&scene.triangles, None, IndexFormat::U32, &params, 3, 100)
                 .expect("gpu == cpu");

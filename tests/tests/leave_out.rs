@@ -22,6 +22,7 @@ fn lopsided() -> (Vec<Triangle>, AdsParams) {
         buckets: 4,
         tile: 1,
         center: Some(Vec3::new(1.0, 1.0, 0.0)),
+        axis: None,
     };
     (tris, params)
 }

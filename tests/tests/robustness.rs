@@ -1111,6 +1111,7 @@ fn scenes_beyond_gpu_limits_are_refused_by_name() {
         buckets: 8,
         tile: 1,
         center: None,
+        axis: None,
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
     let counts = [
@@ -1547,6 +1548,7 @@ fn list_ids_beyond_one_binding_are_split_across_bindings() {
         buckets: 1,
         tile: 1,
         center: None,
+        axis: None,
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
     let entries = cpu.lists.ids.len() as u64;
@@ -1617,6 +1619,7 @@ fn triangles_beyond_one_binding_are_split_across_bindings() {
         buckets: 2,
         tile: 1,
         center: None,
+        axis: None,
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
     let n = tris.len() as u64;
@@ -1680,6 +1683,7 @@ fn hiz_and_offsets_beyond_one_binding_are_split_across_bindings() {
         buckets: 1,
         tile: 1,
         center: None,
+        axis: None,
     };
     let cpu = Ads::build(&tris, &params).expect("cpu build");
     let cells: u64 = cpu.hiz.iter().map(|l| l.len() as u64).sum();

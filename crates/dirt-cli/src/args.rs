@@ -7,6 +7,7 @@ use clap::parser::ValueSource;
 use clap::{ArgMatches, Args};
 use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_eval::rays::{self, RayKind};
+use dirt_math::view::Axis;
 use dirt_math::{Ray, Vec3};
 use dirt_scene::Scene;
 
@@ -60,6 +61,7 @@ pub struct Given {
 #[derive(Debug, Args)]
 pub struct AdsArgs {
     /// Views covering the scene [default: the cost model's choice; with --fixed, cube].
+    /// ortho and ortho2 (orthographic views) are built on the CPU backend only.
     #[arg(long, value_enum, default_value_t = AdsParams::default().views, hide_default_value = true)]
     pub views: ViewsKind,
     /// Face resolution in pixels (square faces) [default: the cost model's choice; with --fixed, 128].
@@ -74,6 +76,10 @@ pub struct AdsArgs {
     /// Centre of the views as "X,Y,Z" [default: centre of the scene bounds].
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
     pub center: Option<Vec3>,
+    /// The axis orthographic views (--views ortho, ortho2) look along [default: the bounds' thinnest].
+    /// With ortho2, --center is a point of the cutting plane [default: the bounds' centre].
+    #[arg(long, value_enum)]
+    pub axis: Option<Axis>,
     /// Use the fixed defaults (cube, 128, B 8, S 1) for what is not given, instead of
     /// the cost model's choice. Every setting gives the same hits; only time and memory differ.
     #[arg(long, conflicts_with = "auto")]
@@ -165,10 +171,13 @@ impl AdsArgs {
             }
             _ => String::new(),
         };
-        let raw = if placed.is_empty() {
+        let raw = if !placed.is_empty() {
+            placed
+        } else if g.views || limits.is_some() {
+            // The GPU passes build perspective views only.
             dirt_cpu::cost::candidates(&base, !g.views)
         } else {
-            placed
+            dirt_cpu::cost::candidates_cpu(&base)
         };
         let cands: Vec<AdsParams> = raw
             .into_iter()
@@ -256,6 +265,7 @@ impl AdsArgs {
             buckets: self.buckets,
             tile: self.tile,
             center: self.center,
+            axis: self.axis,
         }
     }
 }

@@ -80,6 +80,8 @@ fn main() -> ExitCode {
             Command::Trace(a) => a.ads.note_given(sub),
             Command::Info(a) => a.ads.note_given(sub),
             Command::View(a) => a.ads.note_given(sub),
+            Command::Bench(a) => a.ads.note_given(sub),
+            Command::Render(a) => a.ads.note_given(sub),
             _ => {}
         }
     }

@@ -1,6 +1,7 @@
 //! The knobs of the structure ([`AdsParams`]) and of its walk ([`Traversal`]).
 
 use crate::CoreError;
+use dirt_math::view::Axis;
 use dirt_math::{Vec3, ViewsKind};
 use std::fmt;
 
@@ -47,7 +48,12 @@ pub struct AdsParams {
     pub tile: u32,
     /// Cube: the centre of the views. Single: the eye. `None`: the centre of
     /// the scene bounds for the cube; outside the bounds, seeing all of them, for the single view.
+    /// Split orthographic views: a point of the cutting plane (`None`: the
+    /// bounds' centre, the spatial median). One orthographic view takes none.
     pub center: Option<Vec3>,
+    /// Orthographic views: the axis they look along (`None`: the bounds'
+    /// thinnest, [`Axis::thinnest`]). Perspective views take none.
+    pub axis: Option<Axis>,
 }
 
 impl Default for AdsParams {
@@ -58,6 +64,7 @@ impl Default for AdsParams {
             buckets: 8,
             tile: 1,
             center: None,
+            axis: None,
         }
     }
 }
@@ -90,6 +97,12 @@ impl AdsParams {
             && !c.is_finite()
         {
             return bad(format!("center must be finite, got {c}"));
+        }
+        if self.views == ViewsKind::Ortho && self.center.is_some() {
+            return bad("one orthographic view takes no centre".into());
+        }
+        if !self.views.is_ortho() && self.axis.is_some() {
+            return bad(format!("{} views take no axis", self.views));
         }
         let lists = 6u64 * (self.tiles() as u64).pow(2) * self.buckets as u64;
         if lists >= u32::MAX as u64 {

@@ -3,6 +3,7 @@
 
 use crate::{AdsParams, CoreError};
 use dirt_math::clip::{clip_triangle_to_view, polygon_tile_range};
+use dirt_math::view::Axis;
 use dirt_math::{Aabb, Triangle, Vec3, ViewSet, ViewsKind};
 
 /// Checks `params` and `tris` and makes the view set both backends build over.
@@ -79,6 +80,11 @@ pub fn left_out_views(
             name: match all.kind {
                 ViewsKind::Cube => FACES.get(k).copied().unwrap_or("?"),
                 ViewsKind::Single => "single",
+                ViewsKind::Ortho => "ortho",
+                ViewsKind::OrthoSplit => ["ortho, before the cut", "ortho, after the cut"]
+                    .get(k)
+                    .copied()
+                    .unwrap_or("?"),
             },
             reason: if v.has_content {
                 LeftOutReason::NoTriangleReaches
@@ -118,5 +124,13 @@ pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, C
     Ok(match params.views {
         ViewsKind::Cube => ViewSet::cube(params.center.unwrap_or(bounds.center()), &bounds, tiles),
         ViewsKind::Single => ViewSet::single(params.center, &bounds, tiles),
+        ViewsKind::Ortho | ViewsKind::OrthoSplit => {
+            let axis = params
+                .axis
+                .unwrap_or_else(|| Axis::thinnest(bounds.extent()));
+            let cut = (params.views == ViewsKind::OrthoSplit)
+                .then(|| params.center.unwrap_or(bounds.center())[axis.index()]);
+            ViewSet::ortho(axis, cut, &bounds, tiles)
+        }
     })
 }

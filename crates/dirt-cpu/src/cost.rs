@@ -299,6 +299,22 @@ pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
     out
 }
 
+/// [`candidates`] with both perspective kinds, and with no centre given the
+/// orthographic sets too (one view, and two split at the bounds' centre,
+/// looking along the bounds' thinnest axis; 000 §5.3): every kind the CPU
+/// backend builds, each exact for every ray. The GPU passes build
+/// perspective views only, so a choice for the GPU is made among
+/// [`candidates`].
+pub fn candidates_cpu(base: &AdsParams) -> Vec<AdsParams> {
+    let mut out = candidates(base, true);
+    if base.center.is_none() {
+        for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
+            out.extend(candidates(&AdsParams { views, ..*base }, false));
+        }
+    }
+    out
+}
+
 /// The candidates placed at `origin`, where a frame's rays start (a camera's
 /// eye): the cube centred there, which is exact wherever it stands, and the
 /// single view from there when it sees all of `bounds`
@@ -522,10 +538,7 @@ pub const AUTO_BUDGET: f64 = 0.25;
 /// nearest `sqrt(triangles / views)`, so that a triangle covers about one
 /// tile, among the candidates' resolutions.
 fn first_guess(tris: usize, views: ViewsKind, resolutions: &[u32]) -> u32 {
-    let per_view = match views {
-        ViewsKind::Cube => tris as f64 / 6.0,
-        ViewsKind::Single => tris as f64,
-    };
+    let per_view = tris as f64 / views.view_count() as f64;
     let want = per_view.max(1.0).sqrt().log2();
     resolutions
         .iter()
@@ -597,11 +610,10 @@ pub fn auto_within(
     let mut spent_ms = 0.0;
     let per_ray_floor = model.ns_per_ray * rays_per_frame as f64 * 1e-6;
     // Candidates of one placement (views and centre) are neighbours.
-    let same_place = |p: &AdsParams, q: &AdsParams| p.views == q.views && p.center == q.center;
-    let view_count = |p: &AdsParams| match p.views {
-        ViewsKind::Cube => 6.0,
-        ViewsKind::Single => 1.0,
+    let same_place = |p: &AdsParams, q: &AdsParams| {
+        p.views == q.views && p.center == q.center && p.axis == q.axis
     };
+    let view_count = |p: &AdsParams| p.views.view_count() as f64;
     let res = |p: &AdsParams| p.resolution / p.tile.max(1);
     // Estimated frame of an unbuilt candidate, from what was built.
     let estimate = |p: &AdsParams, ranked: &[Candidate]| {

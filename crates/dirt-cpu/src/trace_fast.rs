@@ -163,6 +163,7 @@ struct ViewLanes {
     near: Lanes,
     far: Lanes,
     scale: Lanes,
+    ortho: [bool; VIEW_LANES],
     has_content: [bool; VIEW_LANES],
 }
 
@@ -189,6 +190,7 @@ impl ViewLanes {
             near: lanes(&|v| v.near),
             far: lanes(&|v| v.far),
             scale: lanes(&|v| v.scale),
+            ortho: from_fn(|k| view(k).ortho),
             has_content: from_fn(|k| k < n && view(k).has_content),
         }
     }
@@ -229,22 +231,25 @@ impl ViewLanes {
         // dirt_math::clip::view_frustum: Lo x (s = -tan), Hi x (tan), Lo y, Hi y, Near, Far.
         let neg: [f32; N] = from_fn(|k| -self.tan[k]);
         let tan: [f32; N] = from_fn(|k| self.tan[k]);
+        // The sides' `w` terms (w_terms): the depth, or 1 and 0 in an orthographic view.
+        let wo: [f32; N] = from_fn(|k| if self.ortho[k] { 1.0 } else { o[2][k] });
+        let wd: [f32; N] = from_fn(|k| if self.ortho[k] { 0.0 } else { d[2][k] });
         let parts: [([f32; N], [f32; N]); 6] = [
             (
-                from_fn(|k| o[0][k] - neg[k] * o[2][k] + eps[k]),
-                from_fn(|k| d[0][k] - neg[k] * d[2][k]),
+                from_fn(|k| o[0][k] - neg[k] * wo[k] + eps[k]),
+                from_fn(|k| d[0][k] - neg[k] * wd[k]),
             ),
             (
-                from_fn(|k| tan[k] * o[2][k] - o[0][k] + eps[k]),
-                from_fn(|k| tan[k] * d[2][k] - d[0][k]),
+                from_fn(|k| tan[k] * wo[k] - o[0][k] + eps[k]),
+                from_fn(|k| tan[k] * wd[k] - d[0][k]),
             ),
             (
-                from_fn(|k| o[1][k] - neg[k] * o[2][k] + eps[k]),
-                from_fn(|k| d[1][k] - neg[k] * d[2][k]),
+                from_fn(|k| o[1][k] - neg[k] * wo[k] + eps[k]),
+                from_fn(|k| d[1][k] - neg[k] * wd[k]),
             ),
             (
-                from_fn(|k| tan[k] * o[2][k] - o[1][k] + eps[k]),
-                from_fn(|k| tan[k] * d[2][k] - d[1][k]),
+                from_fn(|k| tan[k] * wo[k] - o[1][k] + eps[k]),
+                from_fn(|k| tan[k] * wd[k] - d[1][k]),
             ),
             (from_fn(|k| o[2][k] - self.near[k] + eps[k]), d[2]),
             (
@@ -335,10 +340,10 @@ impl Cut {
     /// The cuts `[Lo x, Hi x, Lo y, Hi y]` of the side half-spaces of slope
     /// `sx` in x and `sy` in y.
     #[inline]
-    fn sides(vr: &ViewRay, sx: f32, sy: f32) -> [Cut; 4] {
+    fn sides(vr: &ViewRay, (wo, wd): (f32, f32), sx: f32, sy: f32) -> [Cut; 4] {
         let (o, d) = (vr.o, vr.d);
-        let (px, py) = (sx * o[2], sy * o[2]);
-        let (qx, qy) = (sx * d[2], sy * d[2]);
+        let (px, py) = (sx * wo, sy * wo);
+        let (qx, qy) = (sx * wd, sy * wd);
         // Lo: p[axis] - s·p[2] + eps, slope d[axis] - s·d[2]; Hi: the differences swapped.
         let (lo, hi) = cut_lanes(
             [o[0], px, o[1], py],
@@ -424,14 +429,29 @@ fn cuts_of<const N: usize>(f0: [f32; N], f1: [f32; N]) -> ([f32; N], [f32; N]) {
 #[inline(always)]
 fn tile_xy2(v: &View, vr: &ViewRay, ta: f32, tb: f32) -> [f32; 4] {
     let (o, d) = (vr.o, vr.d);
-    let near = v.near * 0.5;
-    let za = fmax(o[2] + ta * d[2], near);
-    let zb = fmax(o[2] + tb * d[2], near);
+    let za = v.w(o[2] + ta * d[2]);
+    let zb = v.w(o[2] + tb * d[2]);
     let oo = [o[0], o[1], o[0], o[1]];
     let dd = [d[0], d[1], d[0], d[1]];
     let tt = [ta, ta, tb, tb];
     let zz = [za, za, zb, zb];
     from_fn(|k| ((oo[k] + tt[k] * dd[k]) / zz[k] + v.tan) / v.step)
+}
+
+/// The terms a tile boundary `s` multiplies in a side's value `p[axis] − s·w`
+/// and slope `d[axis] − s·w'` ([`HalfSpace::eval`], [`HalfSpace::slope`]):
+/// the ray's depth `(o[2], d[2])` in a perspective view; `(1, 0)` in an
+/// orthographic one, where `s·1` is `s` and `s·0` a zero, so the value is
+/// the orthographic side's bit for bit and the slope too up to the sign of
+/// a zero, which no cut looks at ([`cut_lo`], [`cut_hi`] test `f1 > 0` and
+/// `f1 < 0` only).
+#[inline(always)]
+fn w_terms(v: &View, vr: &ViewRay) -> (f32, f32) {
+    if v.ortho {
+        (1.0, 0.0)
+    } else {
+        (vr.o[2], vr.d[2])
+    }
 }
 
 /// `dirt_math::dda::index_range`, inlined.
@@ -500,7 +520,8 @@ fn reach(
     delta: f32,
 ) -> Option<Reach> {
     let (za, zb) = (ray_depth(vr, iv.t0), ray_depth(vr, iv.t1));
-    if !(fmin(za, zb) > v.near * 0.5) {
+    // In an orthographic view the coordinate is `o + t·d`, monotone everywhere.
+    if !(v.ortho || fmin(za, zb) > v.near * 0.5) {
         return None;
     }
     let last = v.tiles - 1;
@@ -744,13 +765,14 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         let minor_forward = b[minor] >= a[minor];
         // Lo at boundary k and Hi at boundary k + 1 of an axis, as two lanes.
         let (o, d) = (vr.o, vr.d);
+        let (wo, wd) = w_terms(v, vr);
         let cuts = |axis: usize, k: u32| {
             let (s0, s1) = (slope[k as usize], slope[k as usize + 1]);
             let (lo, hi) = cut_lanes(
-                [o[axis], s1 * o[2]],
-                [s0 * o[2], o[axis]],
-                [d[axis], s1 * d[2]],
-                [s0 * d[2], d[axis]],
+                [o[axis], s1 * wo],
+                [s0 * wo, o[axis]],
+                [d[axis], s1 * wd],
+                [s0 * wd, d[axis]],
                 vr.eps,
             );
             let cut = |k: usize| Cut {
@@ -763,7 +785,7 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         // minor tile coordinates of their ends as lanes, none of which
         // depends on the best hit; then each is walked as the plain stage
         // walks it, termination test first.
-        let (near, tan, step) = (v.near * 0.5, v.tan, v.step);
+        let (tan, step) = (v.tan, v.step);
         let bands = k1 - k0 + 1;
         let mut kept = (u32::MAX, Cut::NONE, Cut::NONE);
         let mut n = 0;
@@ -778,15 +800,15 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
             let s1: [f32; BAND_LANES] = from_fn(|q| slope[ks[q] as usize + 1]);
             let (l_lo, l_hi) = cut_lanes(
                 [o[major]; BAND_LANES],
-                s0.map(|s| s * o[2]),
+                s0.map(|s| s * wo),
                 [d[major]; BAND_LANES],
-                s0.map(|s| s * d[2]),
+                s0.map(|s| s * wd),
                 vr.eps,
             );
             let (h_lo, h_hi) = cut_lanes(
-                s1.map(|s| s * o[2]),
+                s1.map(|s| s * wo),
                 [o[major]; BAND_LANES],
-                s1.map(|s| s * d[2]),
+                s1.map(|s| s * wd),
                 [d[major]; BAND_LANES],
                 vr.eps,
             );
@@ -799,7 +821,7 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
             // The minor coordinate of `tile_xy` at both ends of each band.
             let minor_at = |t: [f32; BAND_LANES]| -> [f32; BAND_LANES] {
                 from_fn(|q| {
-                    let z = fmax(o[2] + t[q] * d[2], near);
+                    let z = v.w(o[2] + t[q] * d[2]);
                     ((o[minor] + t[q] * d[minor]) / z + tan) / step
                 })
             };
@@ -883,24 +905,9 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         let [ax, ay, bx, by] = tile_xy2(v, vr, iv.t0, iv.t1);
         let (dx, dy) = (bx - ax, by - ay);
         let order = child_order(dx, dy);
-        let lo = |axis: usize, k: u32| {
-            Cut::of(
-                &HalfSpace::Lo {
-                    axis,
-                    s: slope[k as usize],
-                },
-                vr,
-            )
-        };
-        let hi = |axis: usize, k: u32| {
-            Cut::of(
-                &HalfSpace::Hi {
-                    axis,
-                    s: slope[k as usize],
-                },
-                vr,
-            )
-        };
+        let lo = |axis: usize, k: u32| Cut::of(&v.lo(axis, slope[k as usize]), vr);
+        let hi = |axis: usize, k: u32| Cut::of(&v.hi(axis, slope[k as usize]), vr);
+        let wt = w_terms(v, vr);
         // The interval of a cell from its four cuts (in `block_frustum`'s
         // order), if it is not empty and its depth span meets `[zmin, zmax]`.
         let enter = |cuts: [Cut; 4], [zmin, zmax]: [u32; 2]| -> Option<Interval> {
@@ -978,7 +985,7 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
             let cw = sc.widths[c as usize];
             let mx = ((2 * i + 1) << c).min(tiles);
             let my = ((2 * j + 1) << c).min(tiles);
-            let [xlm, xhm, ylm, yhm] = Cut::sides(vr, slope[mx as usize], slope[my as usize]);
+            let [xlm, xhm, ylm, yhm] = Cut::sides(vr, wt, slope[mx as usize], slope[my as usize]);
             let (xl, xh) = self.scratch.x[level as usize][(i & 1) as usize];
             let (yl, yh) = self.scratch.y[level as usize][(j & 1) as usize];
             self.scratch.x[c as usize] = [(xl, xhm), (xlm, xh)];
@@ -1216,13 +1223,15 @@ mod tests {
         fn cuts_clip_like_the_plain_functions(
             o in v3(), d in v3(), tmin in prop_oneof![Just(0.0f32), 0.0f32..2.0],
             tmax in prop_oneof![Just(f32::INFINITY), 0.0f32..5.0],
-            single in any::<bool>(), face in 0usize..6, tiles in 1u32..40, k in 0u32..41, l in 0u32..41,
+            kind in 0usize..4, axis in 0usize..3, face in 0usize..6, tiles in 1u32..40, k in 0u32..41, l in 0u32..41,
         ) {
             let bounds = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
-            let vs = if single {
-                ViewSet::single(None, &bounds, tiles)
-            } else {
-                ViewSet::cube(Vec3::new(0.1, -0.2, 0.05), &bounds, tiles)
+            let axis = dirt_math::view::Axis::ALL[axis];
+            let vs = match kind {
+                0 => ViewSet::cube(Vec3::new(0.1, -0.2, 0.05), &bounds, tiles),
+                1 => ViewSet::single(None, &bounds, tiles),
+                2 => ViewSet::ortho(axis, None, &bounds, tiles),
+                _ => ViewSet::ortho(axis, Some(0.3), &bounds, tiles),
             };
             let ray = Ray::new(o, d, tmin, tmax);
             prop_assume!(ray.validate().is_ok());
@@ -1256,13 +1265,8 @@ mod tests {
                 prop_assert_eq!((plain.t0.to_bits(), plain.t1.to_bits()), (cut.t0.to_bits(), cut.t1.to_bits()));
             }
             let (sx, sy) = (v.boundary(k), v.boundary(l));
-            let sides = Cut::sides(&vr, sx, sy);
-            let planes = [
-                HalfSpace::Lo { axis: 0, s: sx },
-                HalfSpace::Hi { axis: 0, s: sx },
-                HalfSpace::Lo { axis: 1, s: sy },
-                HalfSpace::Hi { axis: 1, s: sy },
-            ];
+            let sides = Cut::sides(&vr, w_terms(v, &vr), sx, sy);
+            let planes = [v.lo(0, sx), v.hi(0, sx), v.lo(1, sy), v.hi(1, sy)];
             for (c, h) in sides.iter().zip(&planes) {
                 let one = Cut::of(h, &vr);
                 prop_assert_eq!((c.lo.to_bits(), c.hi.to_bits()), (one.lo.to_bits(), one.hi.to_bits()));

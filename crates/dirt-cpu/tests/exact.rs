@@ -2,6 +2,7 @@
 
 use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_cpu::{Ads, brute_force, trace_with_stats};
+use dirt_math::view::Axis;
 use dirt_math::{Ray, Triangle, Vec3};
 
 mod common;
@@ -42,7 +43,12 @@ fn random_soup_matches_brute_force() {
     let rs = rays(4000, &tris, &mut rng);
     let truth = brute_force::trace(&tris, &rs);
     assert!(truth.iter().filter(|h| h.is_hit()).count() > 1000);
-    for views in [ViewsKind::Cube, ViewsKind::Single] {
+    for views in [
+        ViewsKind::Cube,
+        ViewsKind::Single,
+        ViewsKind::Ortho,
+        ViewsKind::OrthoSplit,
+    ] {
         for (res, tile) in [(32, 1), (64, 2), (64, 4)] {
             for buckets in [1, 8, 32] {
                 let ads = Ads::build(
@@ -53,6 +59,7 @@ fn random_soup_matches_brute_force() {
                         buckets,
                         tile,
                         center: None,
+                        axis: None,
                     },
                 )
                 .expect("build");
@@ -83,6 +90,53 @@ fn random_soup_matches_brute_force() {
 // The library's default, DirtCpu::auto: the cost model's parameters, chosen
 // at the first build and kept while the triangle count stays; exact like any
 // fixed setting.
+/// Orthographic views along every axis, one or split (at the centre, off
+/// it, outside the bounds), through both traversals: brute force's hits.
+#[test]
+fn orthographic_views_along_every_axis_match_brute_force() {
+    let mut rng = Rng(11);
+    let tris = soup(300, &mut rng);
+    let rs = rays(3000, &tris, &mut rng);
+    let truth = brute_force::trace(&tris, &rs);
+    let cuts = [None, Some(Vec3::splat(0.37)), Some(Vec3::splat(-40.0))];
+    for axis in Axis::ALL {
+        for (views, center) in [(ViewsKind::Ortho, None)]
+            .into_iter()
+            .chain(cuts.map(|c| (ViewsKind::OrthoSplit, c)))
+        {
+            let params = AdsParams {
+                views,
+                resolution: 32,
+                buckets: 4,
+                tile: 1,
+                center,
+                axis: Some(axis),
+            };
+            let ads = Ads::build(&tris, &params).expect("build");
+            for trav in [Traversal::Linear, Traversal::HiZ] {
+                let hits = dirt_cpu::trace(&ads, &tris, &rs, trav);
+                let bad = (0..rs.len())
+                    .filter(|&i| hits[i].bits() != truth[i].bits())
+                    .count();
+                assert_eq!(bad, 0, "{params:?} {trav:?}");
+                let (counted, _) = trace_with_stats(&ads, &tris, &rs, trav);
+                assert!(
+                    counted
+                        .iter()
+                        .zip(&truth)
+                        .all(|(a, b)| a.bits() == b.bits())
+                );
+                // The plain stage (the specification) on every tenth ray.
+                for (r, t) in rs.iter().zip(&truth).step_by(10) {
+                    let mut st = Default::default();
+                    let h = dirt_cpu::trace::trace_ray_plain(&ads, &tris, r, trav, &mut st);
+                    assert_eq!(h.bits(), t.bits(), "{params:?} {trav:?} {r:?}");
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn auto_chooses_once_per_triangle_count_and_stays_exact() {
     use dirt_core::Tracer;

@@ -6,6 +6,7 @@
 use dirt_core::{AdsParams, RayStats, Traversal, ViewsKind};
 use dirt_cpu::trace::{trace_ray, trace_ray_plain};
 use dirt_cpu::{Ads, trace, trace_into, trace_with_stats};
+use dirt_math::view::Axis;
 use dirt_math::{Hit, Ray, Triangle, Vec3};
 use proptest::prelude::*;
 
@@ -59,7 +60,12 @@ fn check(ads: &Ads, tris: &[Triangle], rays: &[Ray], what: &str) -> Result<(), T
 
 fn params() -> impl Strategy<Value = (AdsParams, bool)> {
     (
-        prop_oneof![Just(ViewsKind::Cube), Just(ViewsKind::Single)],
+        prop_oneof![
+            Just(ViewsKind::Cube),
+            Just(ViewsKind::Single),
+            Just(ViewsKind::Ortho),
+            Just(ViewsKind::OrthoSplit)
+        ],
         prop_oneof![
             Just((1u32, 1u32)),
             Just((5, 1)),
@@ -78,15 +84,18 @@ fn params() -> impl Strategy<Value = (AdsParams, bool)> {
             Just(Some(Vec3::new(0.0, -0.9, 0.0)))
         ],
         any::<bool>(),
+        prop_oneof![Just(None), Just(Some(Axis::X)), Just(Some(Axis::Y))],
     )
-        .prop_map(|(views, (resolution, tile), buckets, center, all)| {
+        .prop_map(|(views, (resolution, tile), buckets, center, all, axis)| {
             (
                 AdsParams {
                     views,
                     resolution,
                     buckets,
                     tile,
-                    center,
+                    // One orthographic view takes no centre, the others no axis.
+                    center: center.filter(|_| views != ViewsKind::Ortho),
+                    axis: axis.filter(|_| views.is_ortho()),
                 },
                 all,
             )
@@ -121,6 +130,7 @@ fn large_batches_in_coherent_order_are_the_plain_stage() {
             buckets: 4,
             tile: 1,
             center: None,
+            axis: None,
         };
         let ads = Ads::build(&tris, &p).expect("valid parameters");
         if let Err(e) = check(&ads, &tris, &rs, &format!("{p:?}")) {
@@ -153,6 +163,7 @@ proptest! {
             buckets: 4,
             tile: 1,
             center: Some(eye),
+            axis: None,
         };
         let ads = Ads::build(&tris, &p).expect("valid parameters");
         let rs: Vec<Ray> = (0..400)

@@ -45,6 +45,7 @@ impl GridPoint {
                 buckets,
                 tile,
                 center: None,
+                axis: None,
             },
             at_camera: false,
         }
@@ -725,7 +726,7 @@ fn choose(
         all_rays.len() as u64,
         Traversal::HiZ,
         &dirt_cpu::cost::CostModel::CALIBRATED,
-        &dirt_cpu::cost::candidates(&AdsParams::default(), true),
+        &dirt_cpu::cost::candidates_cpu(&AdsParams::default()),
     )
     .map_err(|e| prep.build_err()(e.into()))?;
     let choose_ms = start.elapsed().as_secs_f64() * 1e3;

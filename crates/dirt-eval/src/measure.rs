@@ -221,7 +221,8 @@ pub fn trace(
 pub struct Setting {
     /// A short name, e.g. `cube r128 B8 S1`.
     pub label: String,
-    /// `cube`, `single` or `single@camera`.
+    /// `cube`, `single`, `single@camera`, `ortho` or `ortho2` (with `-x`,
+    /// `-y` or `-z` when the axis is given).
     pub views: String,
     pub resolution: Option<u32>,
     pub buckets: Option<u32>,
@@ -232,17 +233,17 @@ impl Setting {
     /// The setting of `params`; `at_camera`: the single view placed at the
     /// scene camera's eye.
     pub fn dirt(params: &AdsParams, at_camera: bool) -> Setting {
-        let views = match (params.views, at_camera) {
-            (ViewsKind::Cube, _) => "cube",
-            (ViewsKind::Single, false) => "single",
-            (ViewsKind::Single, true) => "single@camera",
+        let views = match (params.views, at_camera, params.axis) {
+            (ViewsKind::Single, true, _) => "single@camera".to_string(),
+            (v, _, Some(a)) => format!("{v}-{}", a.name()),
+            (v, _, None) => v.to_string(),
         };
         Setting {
             label: format!(
                 "{views} r{} B{} S{}",
                 params.resolution, params.buckets, params.tile
             ),
-            views: views.to_string(),
+            views,
             resolution: Some(params.resolution),
             buckets: Some(params.buckets),
             tile: Some(params.tile),

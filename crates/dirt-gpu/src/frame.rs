@@ -113,11 +113,11 @@ impl GpuAds {
         entries_hint: u64,
     ) -> Result<GpuAds, GpuError> {
         params.validate()?;
+        if params.views.is_ortho() {
+            return Err(GpuError::NotOnGpu(params.views));
+        }
         let tiles = params.tiles();
-        let n_views: u32 = match params.views {
-            ViewsKind::Cube => 6,
-            ViewsKind::Single => 1,
-        };
+        let n_views = params.views.view_count() as u32;
         let cells = crate::hiz_cells(tiles, n_views);
         let n_lists = n_views as u64 * (tiles as u64).pow(2) * params.buckets as u64;
         let capacity = entries_hint.max(4);
@@ -297,9 +297,10 @@ impl GpuAds {
         let center = self.params.center;
         let views_params = ViewsParams {
             n_tris,
+            // Orthographic views never reach here (GpuAds::frame refuses them).
             kind: match self.params.views {
                 ViewsKind::Cube => 0,
-                ViewsKind::Single => 1,
+                _ => 1,
             },
             has_center: center.is_some() as u32,
             tri_shift: self.tris.shift(),

@@ -20,9 +20,10 @@ pub(crate) fn template(kind: ViewsKind, tiles: u32) -> [ViewGpu; 6] {
         min: Vec3::splat(-1.0),
         max: Vec3::splat(1.0),
     };
+    // Orthographic views never reach here (GpuAds::frame refuses them).
     let set = match kind {
         ViewsKind::Cube => ViewSet::cube(Vec3::ZERO, &unit, tiles),
-        ViewsKind::Single => ViewSet::single(None, &unit, tiles),
+        _ => ViewSet::single(None, &unit, tiles),
     };
     crate::views_gpu(&set)
 }

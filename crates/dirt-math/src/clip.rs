@@ -20,6 +20,10 @@ pub enum HalfSpace {
     Near(f32),
     /// `far - z + eps >= 0`.
     Far(f32),
+    /// `p[axis] - s + eps >= 0`: above the boundary `s` of an orthographic view.
+    OrthoLo { axis: usize, s: f32 },
+    /// `s - p[axis] + eps >= 0`: below the boundary `s` of an orthographic view.
+    OrthoHi { axis: usize, s: f32 },
 }
 
 impl HalfSpace {
@@ -31,6 +35,8 @@ impl HalfSpace {
             HalfSpace::Hi { axis, s } => s * p[2] - p[axis] + eps,
             HalfSpace::Near(n) => p[2] - n + eps,
             HalfSpace::Far(f) => f - p[2] + eps,
+            HalfSpace::OrthoLo { axis, s } => p[axis] - s + eps,
+            HalfSpace::OrthoHi { axis, s } => s - p[axis] + eps,
         }
     }
 
@@ -42,6 +48,8 @@ impl HalfSpace {
             HalfSpace::Hi { axis, s } => s * d[2] - d[axis],
             HalfSpace::Near(_) => d[2],
             HalfSpace::Far(_) => -d[2],
+            HalfSpace::OrthoLo { axis, .. } => d[axis],
+            HalfSpace::OrthoHi { axis, .. } => -d[axis],
         }
     }
 }
@@ -107,10 +115,10 @@ pub fn ray_depth(vr: &ViewRay, t: f32) -> f32 {
 /// The six half-spaces of a whole view.
 pub fn view_frustum(v: &View) -> [HalfSpace; 6] {
     [
-        HalfSpace::Lo { axis: 0, s: -v.tan },
-        HalfSpace::Hi { axis: 0, s: v.tan },
-        HalfSpace::Lo { axis: 1, s: -v.tan },
-        HalfSpace::Hi { axis: 1, s: v.tan },
+        v.lo(0, -v.tan),
+        v.hi(0, v.tan),
+        v.lo(1, -v.tan),
+        v.hi(1, v.tan),
         HalfSpace::Near(v.near),
         HalfSpace::Far(v.far),
     ]
@@ -119,22 +127,10 @@ pub fn view_frustum(v: &View) -> [HalfSpace; 6] {
 /// Side half-spaces of the block of tiles `[i0, i1) × [j0, j1)` (a tile, or a Hi-Z cell).
 pub fn block_frustum(v: &View, i0: u32, i1: u32, j0: u32, j1: u32) -> [HalfSpace; 4] {
     [
-        HalfSpace::Lo {
-            axis: 0,
-            s: v.boundary(i0),
-        },
-        HalfSpace::Hi {
-            axis: 0,
-            s: v.boundary(i1),
-        },
-        HalfSpace::Lo {
-            axis: 1,
-            s: v.boundary(j0),
-        },
-        HalfSpace::Hi {
-            axis: 1,
-            s: v.boundary(j1),
-        },
+        v.lo(0, v.boundary(i0)),
+        v.hi(0, v.boundary(i1)),
+        v.lo(1, v.boundary(j0)),
+        v.hi(1, v.boundary(j1)),
     ]
 }
 
@@ -232,6 +228,11 @@ impl Polygon {
             HalfSpace::Far(far) => {
                 for (fk, p) in f.iter_mut().zip(vs) {
                     *fk = far - p[2] + eps;
+                }
+            }
+            HalfSpace::OrthoLo { .. } | HalfSpace::OrthoHi { .. } => {
+                for (fk, p) in f.iter_mut().zip(vs) {
+                    *fk = h.eval(*p, eps);
                 }
             }
         }
@@ -362,8 +363,8 @@ pub fn tile_depth_extent(
 /// polygon may touch.
 pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u32)> {
     let (zlo, _) = poly.depth_range()?;
-    let z = fmax(zlo, v.near * 0.5);
-    // Slope error from the dilation at the smallest depth, plus rounding room.
+    let z = v.w(zlo);
+    // Image error from the dilation at the smallest depth, plus rounding room.
     let delta = v.eps / z / v.step + 1.0 / 256.0;
     let (mut xlo, mut xhi, mut ylo, mut yhi) = (
         f32::INFINITY,
@@ -372,7 +373,7 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
         f32::NEG_INFINITY,
     );
     for p in poly.vertices() {
-        let pz = fmax(p[2], v.near * 0.5);
+        let pz = v.w(p[2]);
         let x = v.tile_coord(p[0] / pz);
         let y = v.tile_coord(p[1] / pz);
         xlo = fmin(xlo, x);
@@ -531,9 +532,15 @@ mod tests {
         // Every sampled point of a triangle that lies inside a tile's frustum
         // has a depth inside the tile extent computed by clipping.
         #[test]
-        fn clipped_extents_contain_sampled_points(a in v3(), b in v3(), c in v3(), face in 0usize..6, tiles in 1u32..12) {
-            let vs = cube(tiles);
-            let v = &vs.views[face];
+        fn clipped_extents_contain_sampled_points(a in v3(), b in v3(), c in v3(), face in 0usize..9, tiles in 1u32..12) {
+            // Faces 0..6: the cube; 6: one orthographic view; 7, 8: the split pair.
+            let b2 = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
+            let vs = match face {
+                0..6 => cube(tiles),
+                6 => ViewSet::ortho(crate::view::Axis::Y, None, &b2, tiles),
+                _ => ViewSet::ortho(crate::view::Axis::X, Some(0.3), &b2, tiles),
+            };
+            let v = &vs.views[match face { 0..6 => face, 8 => 1, _ => 0 }];
             let tri = [v.to_view(a), v.to_view(b), v.to_view(c)];
             let poly = clip_triangle_to_view(v, tri);
             let n = 24;
@@ -543,8 +550,8 @@ mod tests {
                     let p = a + (b - a) * fs + (c - a) * ft;
                     let q = v.to_view(p);
                     if !(q[2] >= v.near && q[2] <= v.far) { continue; }
-                    let (sx, sy) = (q[0] / q[2], q[1] / q[2]);
-                    if sx.abs() > 1.0 || sy.abs() > 1.0 { continue; }
+                    let (sx, sy) = (q[0] / v.w(q[2]), q[1] / v.w(q[2]));
+                    if sx.abs() > v.tan || sy.abs() > v.tan { continue; }
                     let i = (v.tile_coord(sx).floor() as i64).clamp(0, tiles as i64 - 1) as u32;
                     let j = (v.tile_coord(sy).floor() as i64).clamp(0, tiles as i64 - 1) as u32;
                     let poly = poly.expect("a point inside the view means the clipped triangle is not empty");

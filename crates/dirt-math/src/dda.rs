@@ -11,7 +11,7 @@
 //! traversal: the interval of a ray inside a cell of the Hi-Z pyramid, and the
 //! front-to-back order of a cell's four children.
 
-use crate::clip::{HalfSpace, Interval, ray_point};
+use crate::clip::{Interval, ray_point};
 use crate::num::{floor_index, fmax, fmin};
 use crate::view::{View, ViewRay};
 
@@ -34,7 +34,7 @@ pub enum Walk {
 #[inline]
 pub fn tile_xy(v: &View, vr: &ViewRay, t: f32) -> [f32; 2] {
     let p = ray_point(vr, t);
-    let z = fmax(p[2], v.near * 0.5);
+    let z = v.w(p[2]);
     [v.tile_coord(p[0] / z), v.tile_coord(p[1] / z)]
 }
 
@@ -44,7 +44,7 @@ pub fn tile_xy(v: &View, vr: &ViewRay, t: f32) -> [f32; 2] {
 pub fn dilation(v: &View, vr: &ViewRay, iv: &Interval) -> f32 {
     let z0 = vr.o[2] + iv.t0 * vr.d[2];
     let z1 = vr.o[2] + iv.t1 * vr.d[2];
-    let z = fmax(fmin(z0, z1) - vr.eps, v.near * 0.5);
+    let z = v.w(fmin(z0, z1) - vr.eps);
     vr.eps / z / v.step + 1.0 / 256.0
 }
 
@@ -66,20 +66,8 @@ pub fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
 #[inline]
 pub fn clip_to_slab(v: &View, vr: &ViewRay, iv: Interval, axis: usize, k: u32) -> Interval {
     let mut slab = iv;
-    slab.clip(
-        &HalfSpace::Lo {
-            axis,
-            s: v.boundary(k),
-        },
-        vr,
-    );
-    slab.clip(
-        &HalfSpace::Hi {
-            axis,
-            s: v.boundary(k + 1),
-        },
-        vr,
-    );
+    slab.clip(&v.lo(axis, v.boundary(k)), vr);
+    slab.clip(&v.hi(axis, v.boundary(k + 1)), vr);
     slab
 }
 
@@ -284,7 +272,7 @@ mod tests {
         if !(q[2] >= v.near && q[2] <= v.far) {
             return None;
         }
-        let (sx, sy) = (q[0] / q[2], q[1] / q[2]);
+        let (sx, sy) = (q[0] / v.w(q[2]), q[1] / v.w(q[2]));
         if sx.abs() > v.tan || sy.abs() > v.tan {
             return None;
         }
@@ -328,6 +316,15 @@ mod tests {
             prop_assume!(d.length() > 1e-3);
             let vs = ViewSet::cube(Vec3::new(0.2, -0.1, 0.05), &Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) }, tiles);
             check_dense_sampling(&vs.views[face], &Ray::new(o, d, 0.0, 8.0))?;
+        }
+
+        #[test]
+        fn ortho_visits_every_tile_a_dense_sampling_touches(o in v3(3.0), d in v3(1.0), axis in 0usize..3, which in 0usize..3, tiles in 1u32..40) {
+            prop_assume!(d.length() > 1e-3);
+            let b = Aabb { min: Vec3::new(-2.0, -1.0, -0.5), max: Vec3::new(2.0, 1.5, 0.5) };
+            let axis = crate::view::Axis::ALL[axis];
+            let vs = ViewSet::ortho(axis, (which > 0).then_some(0.25), &b, tiles);
+            check_dense_sampling(&vs.views[which.saturating_sub(1)], &Ray::new(o, d, 0.0, 8.0))?;
         }
 
         // Rays through tile corners (exact corner crossings) and along tile boundaries.

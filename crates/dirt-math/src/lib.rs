@@ -3,7 +3,7 @@
 //!
 //! - [`types`]: `#[repr(C)]` Pod types shared with WGSL (`Ray`, `Hit`, `Triangle`).
 //! - [`triangle`]: the watertight ray/triangle test and the deterministic tie-break.
-//! - [`view`]: perspective views, tile grids, the cubemap and single-view sets.
+//! - [`view`]: perspective and orthographic views, tile grids, the cubemap, single-view and orthographic sets.
 //! - [`clip`]: dilated half-spaces, ray and polygon clipping, per-tile depth extents.
 //! - [`dda`]: the conservative tile walk and the Hi-Z stepping helpers.
 //! - [`bucket`]: depth buckets (001 eq. 1).

@@ -1,17 +1,25 @@
-//! Views: perspective views with a square grid of tiles, the cubemap view set
-//! of 004 §3.2 with its face adjacency, and a single-view set.
+//! Views: perspective and orthographic views with a square grid of tiles, the
+//! cubemap view set of 004 §3.2 with its face adjacency, a single-view set,
+//! and the orthographic sets of 000 §5.3 (one view over the bounds, or two
+//! split by a plane).
 //!
 //! View space: `x = (p - apex)·right`, `y = (p - apex)·up`, `z = (p - apex)·forward`
-//! (the depth). A view sees `|x| <= tan·z`, `|y| <= tan·z`, `near <= z <= far`.
-//! Tile `(i, j)` of a view with `tiles` tiles per side covers the slopes
-//! `x/z ∈ [s(i), s(i+1)]`, `y/z ∈ [s(j), s(j+1)]` with `s(k) = k·step − tan`,
-//! `step = 2·tan/tiles`. Row `j` grows with `+y`.
+//! (the depth). A point's *image coordinates* are `x/w`, `y/w`, where `w` is
+//! the depth `z` in a perspective view and 1 in an orthographic one
+//! ([`View::w`]). A view sees `|x| <= tan·w`, `|y| <= tan·w`, `near <= z <= far`.
+//! Tile `(i, j)` of a view with `tiles` tiles per side covers the image
+//! coordinates `x/w ∈ [s(i), s(i+1)]`, `y/w ∈ [s(j), s(j+1)]` with
+//! `s(k) = k·step − tan`, `step = 2·tan/tiles`. Row `j` grows with `+y`.
+//! In a perspective view these are slopes and `tan` is the tangent of the
+//! half field of view; in an orthographic view they are distances and `tan`
+//! is the half width of the image.
 //!
 //! Every frustum used for a decision is *dilated* by the view's `eps` (an
 //! absolute view-space distance), and every ray's by a per-ray `eps`; see
 //! [`crate::clip`]. The dilation is what makes coverage conservative in
 //! floating point.
 
+use crate::clip::HalfSpace;
 use crate::num::fmax;
 use crate::types::{Aabb, Ray};
 use glam::Vec3;
@@ -27,14 +35,15 @@ pub const EPS_REL: f32 = 1.0 / 65536.0;
 /// space, a quarter of this dilation.
 pub const EPS_RAY_REL: f32 = 1.0 / 4096.0;
 
-/// One perspective view with its tile grid.
+/// One view (perspective, or orthographic when [`View::ortho`]) with its tile grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     pub apex: Vec3,
     pub right: Vec3,
     pub up: Vec3,
     pub forward: Vec3,
-    /// tan of the half field of view (1 for a cube face).
+    /// tan of the half field of view (1 for a cube face); the half width of
+    /// the image in an orthographic view.
     pub tan: f32,
     pub near: f32,
     pub far: f32,
@@ -55,6 +64,9 @@ pub struct View {
     /// Hi-Z levels, list offsets): views with content are numbered densely in
     /// view order; [`NO_SLOT`] for a view without content.
     pub slot: u32,
+    /// Orthographic: tile boundaries are the planes `x = s`, `y = s`, not
+    /// `x = s·z`, `y = s·z` (module docs). Built on the CPU backend only.
+    pub ortho: bool,
 }
 
 /// [`View::slot`] of a view without content.
@@ -95,6 +107,7 @@ impl View {
             scale: near,
             has_content: false,
             slot: NO_SLOT,
+            ortho: false,
         };
         let mut far = f32::NEG_INFINITY;
         let mut scale = near;
@@ -113,6 +126,57 @@ impl View {
             near
         };
         v
+    }
+
+    /// [`View::new`] for an orthographic view of half width `half`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn orthographic(
+        apex: Vec3,
+        right: Vec3,
+        up: Vec3,
+        forward: Vec3,
+        half: f32,
+        near: f32,
+        tiles: u32,
+        bounds: &Aabb,
+    ) -> View {
+        View {
+            ortho: true,
+            ..View::new(apex, right, up, forward, half, near, tiles, bounds)
+        }
+    }
+
+    /// The divisor of image coordinates at depth `z`: `z`, clamped to at
+    /// least `near/2` (so it stays positive, and bounded where the ray passes
+    /// the apex), in a perspective view; exactly 1 in an orthographic one,
+    /// where dividing by it changes no bit.
+    #[inline]
+    pub fn w(&self, z: f32) -> f32 {
+        if self.ortho {
+            1.0
+        } else {
+            fmax(z, self.near * 0.5)
+        }
+    }
+
+    /// The half-space above tile boundary `s` on `axis` (0: x, 1: y).
+    #[inline]
+    pub fn lo(&self, axis: usize, s: f32) -> HalfSpace {
+        if self.ortho {
+            HalfSpace::OrthoLo { axis, s }
+        } else {
+            HalfSpace::Lo { axis, s }
+        }
+    }
+
+    /// The half-space below tile boundary `s` on `axis` (0: x, 1: y).
+    #[inline]
+    pub fn hi(&self, axis: usize, s: f32) -> HalfSpace {
+        if self.ortho {
+            HalfSpace::OrthoHi { axis, s }
+        } else {
+            HalfSpace::Hi { axis, s }
+        }
     }
 
     /// World point to view space. Written out (no fused operations) so WGSL can mirror it.
@@ -190,6 +254,52 @@ pub enum ViewsKind {
     /// One perspective view. Exact for every ray when the whole scene is in
     /// its frustum (the default placement); otherwise hits outside it are not found.
     Single,
+    /// One orthographic view over the scene bounds (000 §5.3). Exact for every ray.
+    Ortho,
+    /// Two orthographic views over the scene bounds, split by a plane across
+    /// the axis they look along (000 §5.3, §6.3). Exact for every ray.
+    #[cfg_attr(feature = "clap", value(name = "ortho2"))]
+    OrthoSplit,
+}
+
+/// A world axis: the one orthographic views look along.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    pub const ALL: [Axis; 3] = [Axis::X, Axis::Y, Axis::Z];
+
+    /// 0, 1, 2.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The unit vector.
+    pub fn unit(self) -> Vec3 {
+        [Vec3::X, Vec3::Y, Vec3::Z][self.index()]
+    }
+
+    /// The name used on command lines and in reports: `x`, `y` or `z`.
+    pub fn name(self) -> &'static str {
+        ["x", "y", "z"][self.index()]
+    }
+
+    /// [`single_axis`] as an [`Axis`]: the bounds' thinnest axis.
+    pub fn thinnest(extent: Vec3) -> Axis {
+        let u = single_axis(extent);
+        if u == Vec3::X {
+            Axis::X
+        } else if u == Vec3::Y {
+            Axis::Y
+        } else {
+            Axis::Z
+        }
+    }
 }
 
 impl ViewsKind {
@@ -198,7 +308,23 @@ impl ViewsKind {
         match self {
             ViewsKind::Cube => "cube",
             ViewsKind::Single => "single",
+            ViewsKind::Ortho => "ortho",
+            ViewsKind::OrthoSplit => "ortho2",
         }
+    }
+
+    /// How many views the set has (before any is left out).
+    pub fn view_count(self) -> usize {
+        match self {
+            ViewsKind::Cube => 6,
+            ViewsKind::Single | ViewsKind::Ortho => 1,
+            ViewsKind::OrthoSplit => 2,
+        }
+    }
+
+    /// Orthographic views (built on the CPU backend only).
+    pub fn is_ortho(self) -> bool {
+        matches!(self, ViewsKind::Ortho | ViewsKind::OrthoSplit)
     }
 }
 
@@ -362,6 +488,71 @@ impl ViewSet {
             kind: ViewsKind::Single,
             views: vec![v],
             center: apex,
+            adjacency: Vec::new(),
+        };
+        set.assign_slots();
+        set
+    }
+}
+
+impl ViewSet {
+    /// Orthographic views looking along `+axis` over `bounds` (000 §5.3): one
+    /// view, or with `cut`, two whose depth ranges meet at the plane
+    /// `p[axis] = cut` (the first sees the bounds up to it, the second from
+    /// it on; each far plane is pushed out past the other's near plane by
+    /// the dilation, so together they hold every point of the bounds). The
+    /// image is square, centred on the bounds, and holds their cross-section
+    /// with room to spare, so every triangle is seen and tracing is exact
+    /// for every ray. A cut outside the bounds leaves one view without content.
+    pub fn ortho(axis: Axis, cut: Option<f32>, bounds: &Aabb, tiles: u32) -> ViewSet {
+        let c = bounds.center();
+        let e = bounds.extent();
+        let r = (e.length() * 0.5).max(f32::MIN_POSITIVE);
+        let forward = axis.unit();
+        let (right, up) = match axis {
+            Axis::X => (Vec3::NEG_Z, Vec3::Y),
+            Axis::Y => (Vec3::X, Vec3::NEG_Z),
+            Axis::Z => (Vec3::X, Vec3::Y),
+        };
+        // The apex a little behind the bounds, so every depth is positive
+        // and at least `near` with room; the image half width covers the
+        // cross-section, 1/1024 larger (far beyond rounding).
+        let a = axis.index();
+        let pad = r * (1.0 / 32.0);
+        let apex = c - forward * (0.5 * e[a] + 2.0 * pad);
+        let cross = [e.x, e.y, e.z]
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| k != a)
+            .fold(0.0f32, |m, (_, &x)| m.max(x));
+        let half = (0.5 * cross).max(pad) * (1.0 + 1.0 / 1024.0);
+        let near = pad;
+        let views = match cut {
+            None => vec![View::orthographic(
+                apex, right, up, forward, half, near, tiles, bounds,
+            )],
+            Some(k) => {
+                let (mut lo, mut hi) = (*bounds, *bounds);
+                lo.max[a] = lo.max[a].min(k).max(lo.min[a]);
+                hi.min[a] = hi.min[a].max(k).min(hi.max[a]);
+                let first = View::orthographic(apex, right, up, forward, half, near, tiles, &lo);
+                // The cut's depth as `to_view` computes it (the axes are unit
+                // axes, so the other terms are zeros).
+                let mut at = bounds.min;
+                at[a] = hi.min[a];
+                let near2 = first.to_view(at)[2].max(near);
+                let second = View::orthographic(apex, right, up, forward, half, near2, tiles, &hi);
+                vec![first, second]
+            }
+        };
+        let mut set = ViewSet {
+            kind: if cut.is_some() {
+                ViewsKind::OrthoSplit
+            } else {
+                ViewsKind::Ortho
+            },
+            views,
+            center: c,
             adjacency: Vec::new(),
         };
         set.assign_slots();

@@ -36,7 +36,7 @@ pub struct BenchArgs {
     #[command(flatten)]
     scene: SceneArg,
     #[command(flatten)]
-    ads: AdsArgs,
+    pub ads: AdsArgs,
     /// Number of rays, made by the generator of `dirt rays`.
     #[arg(long, value_name = "N", default_value_t = 200_000)]
     rays: usize,

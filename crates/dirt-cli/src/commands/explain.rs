@@ -44,6 +44,10 @@ pub fn explain(
                 "one view placed outside the bounds sees all of them: exact for every ray, one sixth of the cube's tiles",
             (ViewsKind::Single, Some(_)) =>
                 "one view from the given eye: exact only for hits inside its frustum (use the cube for all rays)",
+            (ViewsKind::Ortho, _) =>
+                "one orthographic view over the bounds sees all of them: exact for every ray (CPU backend only)",
+            (ViewsKind::OrthoSplit, _) =>
+                "two orthographic views, split by a plane across the axis they look along, see all of the bounds: exact for every ray (CPU backend only)",
         }
     );
 
@@ -51,7 +55,11 @@ pub fn explain(
     let sample = rays::generate(tris, None, RayKind::Mixed, SAMPLE, 1)
         .context("cannot make the ray sample for the cost model")?;
     let model = CostModel::CALIBRATED;
-    let mut cands = candidates(params, !given.views);
+    let mut cands = if given.views {
+        candidates(params, false)
+    } else {
+        dirt_cpu::cost::candidates_cpu(params)
+    };
     if !cands.contains(params) {
         cands.push(*params);
     }

@@ -76,7 +76,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     traversal: Option<Traversal>,
     #[command(flatten)]
-    ads: AdsArgs,
+    pub ads: AdsArgs,
     #[command(flatten)]
     camera: crate::args::CameraArgs,
     /// A linear EXR of the same size (e.g. a high-spp render) to print the
