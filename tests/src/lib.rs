@@ -229,7 +229,7 @@ pub fn param_matrix(resolution: u32) -> Vec<AdsParams> {
             }
         }
     }
-       // The orthographic sets (CPU backend only), on three (B, S) pairs.
+    // The orthographic sets (CPU backend only), on three (B, S) pairs.
     for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
         for (buckets, tile) in [(1, 1), (8, 2), (32, 4)] {
             out.push(AdsParams {

@@ -177,7 +177,7 @@ impl AdsArgs {
             // The GPU passes build perspective views only.
             dirt_cpu::cost::candidates(&base, !g.views)
         } else {
-            dirt_cpu::cost::candidates_cpu(&base)
+            dirt_cpu::cost::candidates_cpu(&base, &scene.triangles)
         };
         let cands: Vec<AdsParams> = raw
             .into_iter()

@@ -19,7 +19,7 @@
 
 use crate::{Ads, CpuError, trace_with_stats};
 use dirt_core::{AdsParams, BindingLimits, SplitArray, Traversal, ViewsKind};
-use dirt_math::view::single_sees_all;
+use dirt_math::view::{Axis, single_sees_all};
 use dirt_math::{Aabb, Ray, Triangle, Vec3};
 
 /// Weights of the frame-cost model, in nanoseconds per unit.
@@ -300,16 +300,66 @@ pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
 }
 
 /// [`candidates`] with both perspective kinds, and with no centre given the
-/// orthographic sets too (one view, and two split at the bounds' centre,
-/// looking along the bounds' thinnest axis; 000 §5.3): every kind the CPU
-/// backend builds, each exact for every ray. The GPU passes build
-/// perspective views only, so a choice for the GPU is made among
+/// orthographic sets too, looking along `base.axis` or the bounds' thinnest
+/// axis (000 §5.3): one view, and two split at each of [`ortho_cuts`]. Every
+/// kind the CPU backend builds, each exact for every ray. The GPU passes
+/// build perspective views only, so a choice for the GPU is made among
 /// [`candidates`].
-pub fn candidates_cpu(base: &AdsParams) -> Vec<AdsParams> {
-    let mut out = candidates(base, true);
-    if base.center.is_none() {
-        for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
-            out.extend(candidates(&AdsParams { views, ..*base }, false));
+pub fn candidates_cpu(base: &AdsParams, tris: &[Triangle]) -> Vec<AdsParams> {
+    let mut out = candidates(
+        &AdsParams {
+            axis: None,
+            ..*base
+        },
+        true,
+    );
+    if base.center.is_some() {
+        return out;
+    }
+    let bounds = dirt_core::bounds_of(tris);
+    let axis = base.axis.unwrap_or_else(|| Axis::thinnest(bounds.extent()));
+    let ortho = |views, center| AdsParams {
+        views,
+        center,
+        axis: base.axis,
+        ..*base
+    };
+    out.extend(candidates(&ortho(ViewsKind::Ortho, None), false));
+    for (k, cut) in ortho_cuts(tris, &bounds, axis).into_iter().enumerate() {
+        // The first cut is the bounds' centre, the split's default.
+        let center = (k > 0).then(|| {
+            let mut c = bounds.center();
+            c[axis.index()] = cut;
+            c
+        });
+        out.extend(candidates(&ortho(ViewsKind::OrthoSplit, center), false));
+    }
+    out
+}
+
+/// Where [`candidates_cpu`] cuts the split orthographic views along `axis`:
+/// the spatial median (the centre of `bounds`), then, where they differ from
+/// it, the object median (the median of the triangles' centroids) and the
+/// point halfway between. MacDonald and Booth showed that the best cut lies
+/// between the two medians (000 §6.3); the cost model picks among these.
+/// Nothing but the spatial median for an empty scene.
+pub fn ortho_cuts(tris: &[Triangle], bounds: &Aabb, axis: Axis) -> Vec<f32> {
+    let a = axis.index();
+    let spatial = bounds.center()[a];
+    let mut out = vec![spatial];
+    let mut c: Vec<f32> = tris
+        .iter()
+        .map(|t| (t.vertex(0)[a] + t.vertex(1)[a] + t.vertex(2)[a]) / 3.0)
+        .filter(|x| x.is_finite())
+        .collect();
+    if c.is_empty() || !spatial.is_finite() {
+        return out;
+    }
+    let mid = c.len() / 2;
+    let object = *c.select_nth_unstable_by(mid, f32::total_cmp).1;
+    for cut in [object, 0.5 * (object + spatial)] {
+        if !out.contains(&cut) {
+            out.push(cut);
         }
     }
     out
@@ -775,6 +825,54 @@ pub fn auto_within(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ortho_cuts_are_the_medians_and_between() {
+        // Centroids along x at 0, 1, 2, 3, 10: spatial median 5 (bounds 0..10
+        // with the triangles' extents), object median 2, between 3.5.
+        let tri = |x: f32| {
+            Triangle::new(
+                Vec3::new(x - 0.5, 0.0, 0.0),
+                Vec3::new(x + 0.5, 0.0, 0.0),
+                Vec3::new(x, 1.0, 0.0),
+            )
+        };
+        let tris: Vec<Triangle> = [0.0, 1.0, 2.0, 3.0, 10.0].map(tri).to_vec();
+        let b = Aabb::of_triangles(&tris);
+        assert_eq!(ortho_cuts(&tris, &b, Axis::X), vec![5.0, 2.0, 3.5]);
+        // Flat along z: the medians agree, one cut.
+        assert_eq!(ortho_cuts(&tris, &b, Axis::Z), vec![0.0]);
+        assert_eq!(ortho_cuts(&[], &b, Axis::Y), vec![b.center().y]);
+        // Offered without a centre, every split at its own cut; none with
+        // one. (Along x: the thinnest axis, z, has one cut.)
+        let along_x = AdsParams {
+            axis: Some(Axis::X),
+            ..AdsParams::default()
+        };
+        let all = candidates_cpu(&along_x, &tris);
+        let split: Vec<Option<Vec3>> = all
+            .iter()
+            .filter(|p| p.views == ViewsKind::OrthoSplit && p.resolution == 8 && p.buckets == 4)
+            .map(|p| p.center)
+            .collect();
+        let at = |x: f32| Some(Vec3::new(x, b.center().y, b.center().z));
+        assert_eq!(split, vec![None, at(2.0), at(3.5)]);
+        assert!(all.iter().any(|p| p.views == ViewsKind::Ortho));
+        assert_eq!(
+            candidates_cpu(&AdsParams::default(), &tris).len(),
+            all.len() - 2 * 18
+        );
+        assert!(all.iter().all(|p| p.validate().is_ok()));
+        let placed = AdsParams {
+            center: Some(Vec3::ONE),
+            ..AdsParams::default()
+        };
+        assert!(
+            candidates_cpu(&placed, &tris)
+                .iter()
+                .all(|p| !p.views.is_ortho())
+        );
+    }
 
     #[test]
     fn fit_recovers_known_weights() {

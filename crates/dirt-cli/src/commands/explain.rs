@@ -58,7 +58,7 @@ pub fn explain(
     let mut cands = if given.views {
         candidates(params, false)
     } else {
-        dirt_cpu::cost::candidates_cpu(params)
+        dirt_cpu::cost::candidates_cpu(params, tris)
     };
     if !cands.contains(params) {
         cands.push(*params);
