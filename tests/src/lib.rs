@@ -229,7 +229,7 @@ pub fn param_matrix(resolution: u32) -> Vec<AdsParams> {
             }
         }
     }
-    // The orthographic sets (CPU backend only), on three (B, S) pairs.
+    // The orthographic sets, on three (B, S) pairs.
     for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
         for (buckets, tile) in [(1, 1), (8, 2), (32, 4)] {
             out.push(AdsParams {
@@ -356,7 +356,7 @@ pub fn grid(n: u32, size: f32, z0: f32) -> Vec<Triangle> {
 }
 
 /// The reduced matrix of the robustness cases: views {cube, single} × three
-/// (B, S) pairs, then {ortho, ortho2} × three (CPU only); `trace` is then run with both traversals. `center` is used for
+/// (B, S) pairs, then {ortho, ortho2} × three; `trace` is then run with both traversals. `center` is used for
 /// the cube only (a single view with a centre sees only its frustum).
 pub fn robust_matrix(resolution: u32, center: Option<Vec3>) -> Vec<AdsParams> {
     let mut out = Vec::new();
@@ -376,7 +376,7 @@ pub fn robust_matrix(resolution: u32, center: Option<Vec3>) -> Vec<AdsParams> {
             });
         }
     }
-    // Then the orthographic sets (CPU backend only: the GPU refuses them).
+    // Then the orthographic sets.
     for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
         for (buckets, tile) in [(8, 1), (1, 2), (32, 4)] {
             out.push(AdsParams {
