@@ -206,10 +206,11 @@ impl Tracer for DirtCpu {
         // Say what the cost model chose, since nobody gave it (the centre
         // follows the origin, so it is read from the parameters in use).
         let p = self.params;
-        let at = if p.center.is_some() {
-            " at the rays' origin"
-        } else {
-            ""
+        let at = match p.center {
+            // The split orthographic views' centre is a point of their cut.
+            Some(c) if p.views.is_ortho() => format!(" cut through {},{},{}", c.x, c.y, c.z),
+            Some(_) => " at the rays' origin".to_string(),
+            None => String::new(),
         };
         format!(
             "dirt-cpu ({}; the cost model's {} r{} B{} S{}{at})",
@@ -240,7 +241,8 @@ impl Tracer for DirtCpu {
         }
         // Only a choice at an origin reads the bounds.
         let bounds = || dirt_core::bounds_of(tris);
-        if self.auto.is_some() && self.params.center.is_some() {
+        // (A centre of the split orthographic views is their cut, not an origin.)
+        if self.auto.is_some() && self.params.center.is_some() && !self.params.views.is_ortho() {
             // A choice placed at the origin moves with it; a single view must
             // still see the whole scene from there, else the choice is made again.
             match self.origin {

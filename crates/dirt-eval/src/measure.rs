@@ -222,7 +222,8 @@ pub struct Setting {
     /// A short name, e.g. `cube r128 B8 S1`.
     pub label: String,
     /// `cube`, `single`, `single@camera`, `ortho` or `ortho2` (with `-x`,
-    /// `-y` or `-z` when the axis is given).
+    /// `-y` or `-z` when the axis is given, and `@x,y,z`, a point of the
+    /// cut, when the split is not at the bounds' centre).
     pub views: String,
     pub resolution: Option<u32>,
     pub buckets: Option<u32>,
@@ -233,11 +234,15 @@ impl Setting {
     /// The setting of `params`; `at_camera`: the single view placed at the
     /// scene camera's eye.
     pub fn dirt(params: &AdsParams, at_camera: bool) -> Setting {
-        let views = match (params.views, at_camera, params.axis) {
+        let mut views = match (params.views, at_camera, params.axis) {
             (ViewsKind::Single, true, _) => "single@camera".to_string(),
             (v, _, Some(a)) => format!("{v}-{}", a.name()),
             (v, _, None) => v.to_string(),
         };
+        // The split orthographic views' centre is a point of their cut.
+        if let (ViewsKind::OrthoSplit, Some(c)) = (params.views, params.center) {
+            views = format!("{views}@{:.3},{:.3},{:.3}", c.x, c.y, c.z);
+        }
         Setting {
             label: format!(
                 "{views} r{} B{} S{}",
