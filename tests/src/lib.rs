@@ -229,19 +229,25 @@ pub fn param_matrix(resolution: u32) -> Vec<AdsParams> {
             }
         }
     }
-    // The orthographic sets, on three (B, S) pairs.
-    for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
-        for (buckets, tile) in [(1, 1), (8, 2), (32, 4)] {
-            out.push(AdsParams {
+    out.extend(ortho_params(resolution, [(1, 1), (8, 2), (32, 4)]));
+    out
+}
+
+/// The orthographic sets (one view, then two split) at `resolution`, on
+/// each `(B, S)` pair, looking along the bounds' thinnest axis.
+pub fn ortho_params(resolution: u32, pairs: [(u32, u32); 3]) -> Vec<AdsParams> {
+    [ViewsKind::Ortho, ViewsKind::OrthoSplit]
+        .into_iter()
+        .flat_map(|views| {
+            pairs.map(|(buckets, tile)| AdsParams {
                 views,
                 resolution,
                 buckets,
                 tile,
                 ..AdsParams::default()
-            });
-        }
-    }
-    out
+            })
+        })
+        .collect()
 }
 
 /// Builds with `params`, traces with both traversals and returns a description
@@ -376,18 +382,7 @@ pub fn robust_matrix(resolution: u32, center: Option<Vec3>) -> Vec<AdsParams> {
             });
         }
     }
-    // Then the orthographic sets.
-    for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
-        for (buckets, tile) in [(8, 1), (1, 2), (32, 4)] {
-            out.push(AdsParams {
-                views,
-                resolution,
-                buckets,
-                tile,
-                ..AdsParams::default()
-            });
-        }
-    }
+    out.extend(ortho_params(resolution, [(8, 1), (1, 2), (32, 4)]));
     out
 }
 
