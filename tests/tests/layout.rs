@@ -67,11 +67,7 @@ fn shared_structs_match_their_wgsl() {
             step,
             scale,
             slot,
-            adjacency,
-            ortho,
-            _pad0,
-            _pad1,
-            _pad2
+            adjacency
         }),
     );
     check(
@@ -153,7 +149,7 @@ fn shared_structs_match_their_wgsl() {
             has_center,
             tri_shift,
             center,
-            axis
+            _pad1
         }),
     );
     check(
