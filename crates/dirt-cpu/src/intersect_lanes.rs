@@ -63,15 +63,18 @@ pub(crate) fn intersect_closest_lanes(
 ) {
     let o = ray.origin;
     let tri: [&Triangle; LANES] = from_fn(|k| &tris[ids[k] as usize]);
-    // Vertex `n` relative to the origin, per axis, as lanes.
-    let rel = |n: usize| -> [L; 3] { from_fn(|axis| from_fn(|k| tri[k].v[n][axis] - o[axis])) };
-    let (a, b, c) = (rel(0), rel(1), rel(2));
     let (kx, ky, kz) = (sh.kx, sh.ky, sh.kz);
+    // Vertex `n`'s component `axis` relative to the origin, as lanes: only
+    // the ray's three axes in its order, loaded where they lie, so no lane
+    // array is indexed by the ray's axes.
+    let rel = |n: usize, axis: usize| -> L { from_fn(|k| tri[k].v[n][axis] - o[axis]) };
+    let vertex = |n: usize| -> [L; 3] { [rel(n, kx), rel(n, ky), rel(n, kz)] };
+    let (a, b, c) = (vertex(0), vertex(1), vertex(2));
     let (sx, sy) = (sh.sx, sh.sy);
     let shear = |p: &[L; 3]| -> (L, L) {
         (
-            from_fn(|k| p[kx][k] - sx * p[kz][k]),
-            from_fn(|k| p[ky][k] - sy * p[kz][k]),
+            from_fn(|k| p[0][k] - sx * p[2][k]),
+            from_fn(|k| p[1][k] - sy * p[2][k]),
         )
     };
     let ((ax, ay), (bx, by), (cx, cy)) = (shear(&a), shear(&b), shear(&c));
@@ -93,7 +96,7 @@ pub(crate) fn intersect_closest_lanes(
     let det: L = from_fn(|k| e0[k] + e1[k] + e2[k]);
     let sz = sh.sz;
     let tt: L =
-        from_fn(|k| e0[k] * (sz * a[kz][k]) + e1[k] * (sz * b[kz][k]) + e2[k] * (sz * c[kz][k]));
+        from_fn(|k| e0[k] * (sz * a[2][k]) + e1[k] * (sz * b[2][k]) + e2[k] * (sz * c[2][k]));
     let t: L = from_fn(|k| tt[k] / det[k]);
     let cap = best.t;
     let pass: [bool; LANES] = from_fn(|k| {
@@ -106,8 +109,10 @@ pub(crate) fn intersect_closest_lanes(
         if !pass[k] {
             continue;
         }
-        let vertex = |p: &[L; 3]| -> [f32; 3] { from_fn(|axis| p[axis][k]) };
-        let abc = [vertex(&a), vertex(&b), vertex(&c)];
+        // The vertices relative to the origin in world axes, as finish
+        // takes them: the same subtractions, so the same bits.
+        let t = tri[k];
+        let abc: [[f32; 3]; 3] = from_fn(|n| from_fn(|axis| t.v[n][axis] - o[axis]));
         let hit = finish(ray, sh, tri[k], abc, [e0[k], e1[k], e2[k]], best.t);
         keep_closest(hit, ids[k], best);
     }
