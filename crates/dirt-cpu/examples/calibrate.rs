@@ -1,6 +1,7 @@
-//! Measures build and trace times over scenes and parameters and fits the
-//! weights of `dirt_cpu::cost::CostModel` (printed as Rust, ready to paste
-//! into `CostModel::CALIBRATED`). Run in release:
+//! Measures build and trace times over scenes and parameters (every view
+//! kind) and fits the weights of `dirt_cpu::cost::CostModel` (printed as
+//! Rust, ready to paste into `CostModel::CALIBRATED`), then prints how well
+//! the fitted model and the one in use rank the measurements. Run in release:
 //!
 //! ```text
 //! cargo run --release -p dirt-cpu --example calibrate
@@ -62,7 +63,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let scene = dirt_scene::builtin(name).ok_or("unknown built-in scene")?;
         let tris = &scene.triangles;
         let sample = rays(&scene.bounds(), 20_000, 7);
-        for views in [ViewsKind::Cube, ViewsKind::Single] {
+        for views in [
+            ViewsKind::Cube,
+            ViewsKind::Single,
+            ViewsKind::Ortho,
+            ViewsKind::OrthoSplit,
+        ] {
             for resolution in [32, 64, 128, 256] {
                 for buckets in [1, 4, 8, 16, 32] {
                     let tile = 1;
@@ -116,33 +122,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         traces.len(),
         builds.len()
     );
-    // How well the model ranks: Spearman's rank correlation between predicted
-    // and measured cost, per part and for whole frames of a few ray counts.
+    // How well a model ranks: Spearman's rank correlation between predicted
+    // and measured cost, per part and for whole frames of a few ray counts;
+    // for the fitted model and for the one in use (`CostModel::CALIBRATED`).
     let rho = |pred: Vec<f64>, meas: Vec<f64>| {
         rank_correlation(&pred, &meas).map_or("undefined".to_string(), |r| format!("{r:.3}"))
     };
-    println!(
-        "rank correlation, predicted vs measured: trace per ray {}, build {}",
-        rho(
-            traces.iter().map(|(c, _)| m.ray_ns(c)).collect(),
-            traces.iter().map(|(_, ns)| *ns).collect()
-        ),
-        rho(
-            builds.iter().map(|(c, _)| m.build_ms(c)).collect(),
-            builds.iter().map(|(_, ms)| *ms).collect()
-        )
-    );
-    for rays in [5_000u64, 100_000, 1_000_000] {
+    for (label, m) in [("fitted", m), ("in use", CostModel::CALIBRATED)] {
         println!(
-            "rank correlation, predicted vs measured frame of {rays} rays: {}",
+            "rank correlation ({label}), predicted vs measured: trace per ray {}, build {}",
             rho(
-                frames.iter().map(|(c, _, _)| m.frame_ms(c, rays)).collect(),
-                frames
-                    .iter()
-                    .map(|(_, b, ns)| b + ns * rays as f64 * 1e-6)
-                    .collect()
+                traces.iter().map(|(c, _)| m.ray_ns(c)).collect(),
+                traces.iter().map(|(_, ns)| *ns).collect()
+            ),
+            rho(
+                builds.iter().map(|(c, _)| m.build_ms(c)).collect(),
+                builds.iter().map(|(_, ms)| *ms).collect()
             )
         );
+        for rays in [5_000u64, 100_000, 1_000_000] {
+            println!(
+                "rank correlation ({label}), predicted vs measured frame of {rays} rays: {}",
+                rho(
+                    frames.iter().map(|(c, _, _)| m.frame_ms(c, rays)).collect(),
+                    frames
+                        .iter()
+                        .map(|(_, b, ns)| b + ns * rays as f64 * 1e-6)
+                        .collect()
+                )
+            );
+        }
     }
     Ok(())
 }

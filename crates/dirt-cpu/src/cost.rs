@@ -78,6 +78,13 @@ impl CostModel {
     /// ranked with these constants too: a fit that included them (480
     /// traces) ranked no better (0.87 / 0.95 / 0.94, 0.91, 0.88) and chose a
     /// slower structure for the deforming grid's frames of 100 000 rays.
+    ///
+    /// Measured again after the trace's speed work, with the orthographic
+    /// kinds added to the sweep ({cube, single, ortho, ortho2}: 640 traces,
+    /// 320 builds): these constants rank the measurements with 0.87 (trace
+    /// per ray), 0.86 (build), and for whole frames 0.85 (5 000 rays), 0.88
+    /// (100 000), 0.88 (1 000 000); a fit to that sweep ranks them no better
+    /// (0.87, 0.85; 0.87, 0.88, 0.87), so these stay.
     pub const CALIBRATED: CostModel = CostModel {
         ns_per_node: 24.53,
         ns_per_list: 2.418,

@@ -289,12 +289,12 @@ impl Axis {
         ["x", "y", "z"][self.index()]
     }
 
-    /// [`single_axis`] as an [`Axis`]: the bounds' thinnest axis.
+    /// The axis of the smallest extent (ties go to z, then y): what
+    /// [`single_axis`] and the orthographic views look along by default.
     pub fn thinnest(extent: Vec3) -> Axis {
-        let u = single_axis(extent);
-        if u == Vec3::X {
+        if extent.x < extent.y && extent.x < extent.z {
             Axis::X
-        } else if u == Vec3::Y {
+        } else if extent.y < extent.z {
             Axis::Y
         } else {
             Axis::Z
@@ -346,13 +346,7 @@ pub const EDGE_TOP: usize = 3; // y = +tan·z
 /// the fewest triangles; seen edge-on, one tile can list a whole row of them.
 /// The `views` stage (`views.wgsl`) makes the same choice on the GPU.
 pub fn single_axis(extent: Vec3) -> Vec3 {
-    if extent.x < extent.y && extent.x < extent.z {
-        Vec3::X
-    } else if extent.y < extent.z {
-        Vec3::Y
-    } else {
-        Vec3::Z
-    }
+    Axis::thinnest(extent).unit()
 }
 
 /// Cube faces: +X, -X, +Y, -Y, +Z, -Z (forward, right, up).
