@@ -147,21 +147,33 @@ impl<T: Copy> Groups<T> {
 /// next pass finds its items again).
 #[derive(Debug)]
 pub(crate) struct Budget {
-    max: usize,
+    max: AtomicUsize,
     used: AtomicUsize,
 }
 
 impl Budget {
     pub(crate) fn new(max: usize) -> Self {
         Budget {
-            max,
+            max: AtomicUsize::new(max),
             used: AtomicUsize::new(0),
         }
     }
 
     /// What is left of the budget now.
     pub(crate) fn room(&self) -> usize {
-        self.max.saturating_sub(self.used.load(Ordering::Relaxed))
+        self.max
+            .load(Ordering::Relaxed)
+            .saturating_sub(self.used.load(Ordering::Relaxed))
+    }
+
+    /// Raises the budget by `n` items (for what the pass has shown the
+    /// structure will hold).
+    pub(crate) fn raise(&self, n: usize) {
+        let _ = self
+            .max
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |m| {
+                Some(m.saturating_add(n))
+            });
     }
 
     /// Charges a piece's `groups` to the budget: kept (trimmed) when `wanted`
@@ -189,7 +201,7 @@ impl Budget {
     /// Charges `n` items; whether they fit in what was left.
     fn charge(&self, n: usize) -> bool {
         let before = self.used.fetch_add(n, Ordering::Relaxed);
-        before.saturating_add(n) <= self.max
+        before.saturating_add(n) <= self.max.load(Ordering::Relaxed)
     }
 }
 

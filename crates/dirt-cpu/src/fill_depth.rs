@@ -23,6 +23,9 @@ use std::sync::atomic::{AtomicU32, Ordering};
 /// found for the next, and of the parallel loops over triangles.
 pub(crate) const PIECE: usize = 256;
 
+/// Fragments found per fragment the budget grows by.
+const EARN: usize = 2;
+
 /// Calls `f(tile, zlo, zhi)` for every tile of every view with content that
 /// triangle `t` touches (`tile` indexes the depth bounds), with its
 /// conservative depth extent there: views in order, then
@@ -59,7 +62,8 @@ pub fn fill_depth(views: &ViewSet, tris: &[Triangle]) -> Vec<[u32; 2]> {
 }
 
 /// [`fill_depth`], keeping the fragments of whole pieces while they number at
-/// most `keep_max` in all.
+/// most `keep_max` in all, plus one for every [`EARN`] fragments found by
+/// the pieces before.
 pub fn fill_depth_keeping(
     views: &ViewSet,
     tris: &[Triangle],
@@ -92,8 +96,10 @@ pub fn fill_depth_keeping(
             let room = budget.room();
             let mut keep = room > 0;
             let mut found = Groups::new();
+            let mut seen = 0usize;
             for t in piece {
                 for_each_fragment(views, t, |tile, lo, hi| {
+                    seen += 1;
                     let e = &bounds[tile];
                     // A locked update only where it changes the bound: most
                     // fragments of a tile after its first do not (x86 has no
@@ -118,6 +124,11 @@ pub fn fill_depth_keeping(
                     found.close();
                 }
             }
+            // Every fragment becomes at least one list node of 4 bytes (its
+            // depth extent lies in its tile's bounds): the fragments found
+            // show that the structure will be larger, and the budget of the
+            // pieces after this one grows with them (peak_memory.rs).
+            budget.raise(seen / EARN);
             budget.settle(found, keep)
         })
         .collect();

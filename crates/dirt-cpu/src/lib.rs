@@ -95,8 +95,9 @@ impl Ads {
         let t0 = Instant::now();
         // fill_primitives needs fill_depth's fragments again: kept while they
         // take no more memory than twice the list offsets will (12 B a
-        // fragment, 4 B a list), which keeps the peak within its bound
-        // (ARCHITECTURE.md, "Memory").
+        // fragment, 4 B a list) and one and a half times the nodes the
+        // fragments found so far will become, which keeps the peak within
+        // its bound (ARCHITECTURE.md, "Memory").
         let tiles = views.slots() * views.views.first().map_or(0, |v| v.tile_count());
         let keep = tiles.saturating_mul(params.buckets as usize) * 2 / 3;
         let (depth, fragments) = fill_depth::fill_depth_keeping(&views, tris, keep);
