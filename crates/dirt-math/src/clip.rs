@@ -28,7 +28,7 @@ pub enum HalfSpace {
 
 impl HalfSpace {
     /// Signed value at a view-space point.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, p: [f32; 3], eps: f32) -> f32 {
         match *self {
             HalfSpace::Lo { axis, s } => p[axis] - s * p[2] + eps,
@@ -230,9 +230,14 @@ impl Polygon {
                     *fk = far - p[2] + eps;
                 }
             }
-            HalfSpace::OrthoLo { .. } | HalfSpace::OrthoHi { .. } => {
+            HalfSpace::OrthoLo { axis, s } => {
                 for (fk, p) in f.iter_mut().zip(vs) {
-                    *fk = h.eval(*p, eps);
+                    *fk = p[axis] - s + eps;
+                }
+            }
+            HalfSpace::OrthoHi { axis, s } => {
+                for (fk, p) in f.iter_mut().zip(vs) {
+                    *fk = s - p[axis] + eps;
                 }
             }
         }
