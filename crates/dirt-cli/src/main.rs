@@ -69,6 +69,14 @@ enum Command {
     View(view::ViewArgs),
 }
 
+/// The program's allocator: a frame's rebuild allocates and frees buffers of
+/// megabytes, which the system allocator hands back to the kernel and then
+/// page-faults in again, zeroed, every frame; mimalloc keeps them for reuse
+/// (the deforming grid's build: 3.92 -> 3.43 ms). Every backend of a run
+/// (DIRT and its peers alike) shares it.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> ExitCode {
     let matches = Cli::command().get_matches();
     let mut cli = match Cli::from_arg_matches(&matches) {
