@@ -232,8 +232,10 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "- Times are medians of {} runs (GPU: 1–2). Trace times cover all rays of a type; Mrays/s = rays / time.",
-        res.repeat
+        "- Times are medians of at least {} runs, and of more (up to {}) until the runs of a measurement have taken {} ms (GPU: 1–2); builds and traces of every backend alike. Trace times cover all rays of a type; Mrays/s = rays / time.",
+        res.repeat,
+        crate::measure::STEADY_RUNS,
+        crate::measure::STEADY_MS
     );
     let _ = writeln!(
         s,
