@@ -72,8 +72,9 @@ enum Command {
 /// The program's allocator: a frame's rebuild allocates and frees buffers of
 /// megabytes, which the system allocator hands back to the kernel and then
 /// page-faults in again, zeroed, every frame; mimalloc keeps them for reuse
-/// (the deforming grid's build: 3.92 -> 3.43 ms). Every backend of a run
-/// (DIRT and its peers alike) shares it.
+/// (the deforming grid's build: 3.92 -> 3.43 ms). It serves every Rust
+/// allocation of a run, DIRT's and its peers' alike; Embree allocates its
+/// own structures through the C library, as in any program that links it.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
