@@ -6,7 +6,8 @@
 #import view
 #import work
 
-// dirt_math::clip::HalfSpace as (kind, axis, s): kind 0 = Lo, 1 = Hi, 2 = Near (s = near), 3 = Far (s = far).
+// dirt_math::clip::HalfSpace as (kind, axis, s): kind 0 = Lo, 1 = Hi, 2 = Near (s = near), 3 = Far (s = far),
+// 4 = OrthoLo, 5 = OrthoHi.
 struct HalfSpace {
     kind: u32,
     axis: u32,
@@ -24,8 +25,14 @@ fn hs_eval(h: HalfSpace, p: vec3<f32>, eps: f32) -> f32 {
         case 2u: {
             return p[2] - h.s + eps;
         }
-        default: {
+        case 3u: {
             return h.s - p[2] + eps;
+        }
+        case 4u: {
+            return p[h.axis] - h.s + eps;
+        }
+        default: {
+            return h.s - p[h.axis] + eps;
         }
     }
 }
@@ -41,18 +48,26 @@ fn hs_slope(h: HalfSpace, d: vec3<f32>) -> f32 {
         case 2u: {
             return d[2];
         }
-        default: {
+        case 3u: {
             return -d[2];
+        }
+        case 4u: {
+            return d[h.axis];
+        }
+        default: {
+            return -d[h.axis];
         }
     }
 }
 
-fn hs_lo(axis: u32, s: f32) -> HalfSpace {
-    return HalfSpace(0u, axis, s);
+// dirt_math::View::lo: above tile boundary s of the view, on axis (0: x, 1: y).
+fn view_lo(v: View, axis: u32, s: f32) -> HalfSpace {
+    return HalfSpace(select(0u, 4u, v.ortho != 0u), axis, s);
 }
 
-fn hs_hi(axis: u32, s: f32) -> HalfSpace {
-    return HalfSpace(1u, axis, s);
+// dirt_math::View::hi: below tile boundary s of the view.
+fn view_hi(v: View, axis: u32, s: f32) -> HalfSpace {
+    return HalfSpace(select(1u, 5u, v.ortho != 0u), axis, s);
 }
 
 // dirt_math::clip::Interval
@@ -102,16 +117,16 @@ fn ray_depth(vr: ViewRay, t: f32) -> f32 {
 fn view_halfspace(v: View, k: u32) -> HalfSpace {
     switch k {
         case 0u: {
-            return HalfSpace(0u, 0u, -v.tan);
+            return view_lo(v, 0u, -v.tan);
         }
         case 1u: {
-            return HalfSpace(1u, 0u, v.tan);
+            return view_hi(v, 0u, v.tan);
         }
         case 2u: {
-            return HalfSpace(0u, 1u, -v.tan);
+            return view_lo(v, 1u, -v.tan);
         }
         case 3u: {
-            return HalfSpace(1u, 1u, v.tan);
+            return view_hi(v, 1u, v.tan);
         }
         case 4u: {
             return HalfSpace(2u, 0u, v.near);
@@ -126,16 +141,16 @@ fn view_halfspace(v: View, k: u32) -> HalfSpace {
 fn block_halfspace(v: View, i0: u32, i1: u32, j0: u32, j1: u32, k: u32) -> HalfSpace {
     switch k {
         case 0u: {
-            return HalfSpace(0u, 0u, boundary(v, i0));
+            return view_lo(v, 0u, boundary(v, i0));
         }
         case 1u: {
-            return HalfSpace(1u, 0u, boundary(v, i1));
+            return view_hi(v, 0u, boundary(v, i1));
         }
         case 2u: {
-            return HalfSpace(0u, 1u, boundary(v, j0));
+            return view_lo(v, 1u, boundary(v, j0));
         }
         default: {
-            return HalfSpace(1u, 1u, boundary(v, j1));
+            return view_hi(v, 1u, boundary(v, j1));
         }
     }
 }
@@ -264,7 +279,7 @@ fn polygon_tile_range(v: View, poly: Polygon) -> TileRange {
     }
     var pl = poly;
     let zlo = polygon_depth_range(&pl).x;
-    let z = fmax(zlo, v.near * 0.5);
+    let z = view_w(v, zlo);
     let delta = div_cr(div_cr(v.eps, z), v.step) + 0.00390625;
     var xlo = f32_inf();
     var xhi = f32_neg_inf();
@@ -272,7 +287,7 @@ fn polygon_tile_range(v: View, poly: Polygon) -> TileRange {
     var yhi = f32_neg_inf();
     for (var k = 0u; k < poly.len; k++) {
         let p = poly.v[k];
-        let pz = fmax(p[2], v.near * 0.5);
+        let pz = view_w(v, p[2]);
         let x = tile_coord(v, div_cr(p[0], pz));
         let y = tile_coord(v, div_cr(p[1], pz));
         xlo = fmin(xlo, x);

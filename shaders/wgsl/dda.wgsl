@@ -9,14 +9,14 @@
 
 fn tile_xy(v: View, vr: ViewRay, t: f32) -> vec2<f32> {
     let p = ray_point(vr, t);
-    let z = fmax(p[2], v.near * 0.5);
+    let z = view_w(v, p[2]);
     return vec2<f32>(tile_coord(v, div_cr(p[0], z)), tile_coord(v, div_cr(p[1], z)));
 }
 
 fn dilation(v: View, vr: ViewRay, iv: Interval) -> f32 {
     let z0 = vr.o[2] + iv.t0 * vr.d[2];
     let z1 = vr.o[2] + iv.t1 * vr.d[2];
-    let z = fmax(fmin(z0, z1) - vr.eps, v.near * 0.5);
+    let z = view_w(v, fmin(z0, z1) - vr.eps);
     return div_cr(div_cr(vr.eps, z), v.step) + 0.00390625;
 }
 

@@ -42,16 +42,16 @@ fn intersect_one(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 
-// Case i: a view (24 words, dirt_math::ViewGpu), a ray (8 words) -> per view
+// Case i: a view (28 words, dirt_math::ViewGpu), a ray (8 words) -> per view
 // interval and exit, the walk's dilation and the projected end points
 // (t0, t1, exit, delta, ax, ay, bx, by).
 @compute @workgroup_size(64)
 fn view_walk_one(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
-    let b = 32u * i;
-    if b + 31u < arrayLength(&st_in) {
-        let v = View(st_v(b), st_f(b + 3u), st_v(b + 4u), st_f(b + 7u), st_v(b + 8u), st_f(b + 11u), st_v(b + 12u), st_f(b + 15u), st_in[b + 16u], st_f(b + 17u), st_f(b + 18u), st_in[b + 19u], vec4<u32>(st_in[b + 20u], st_in[b + 21u], st_in[b + 22u], st_in[b + 23u]));
-        let ray = Ray(st_v(b + 24u), st_f(b + 27u), st_v(b + 28u), st_f(b + 31u));
+    let b = 36u * i;
+    if b + 35u < arrayLength(&st_in) {
+        let v = View(st_v(b), st_f(b + 3u), st_v(b + 4u), st_f(b + 7u), st_v(b + 8u), st_f(b + 11u), st_v(b + 12u), st_f(b + 15u), st_in[b + 16u], st_f(b + 17u), st_f(b + 18u), st_in[b + 19u], vec4<u32>(st_in[b + 20u], st_in[b + 21u], st_in[b + 22u], st_in[b + 23u]), st_in[b + 24u], 0u, 0u, 0u);
+        let ray = Ray(st_v(b + 28u), st_f(b + 31u), st_v(b + 32u), st_f(b + 35u));
         let vr = view_ray(v, ray);
         let c = clip_ray_to_view(v, vr, ray.tmin, ray.tmax);
         let o = 8u * i;

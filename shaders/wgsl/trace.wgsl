@@ -240,8 +240,8 @@ fn linear(v: View, vr: ViewRay, iv: Interval) {
     while walking && n <= kr.hi - kr.lo && step(1u, n) {
         let k = select(kr.hi - n, kr.lo + n, forward);
         var band = iv;
-        clip_interval(&band, hs_lo(major, boundary(v, k)), vr);
-        clip_interval(&band, hs_hi(major, boundary(v, k + 1u)), vr);
+        clip_interval(&band, view_lo(v, major, boundary(v, k)), vr);
+        clip_interval(&band, view_hi(v, major, boundary(v, k + 1u)), vr);
         if !is_empty(band) {
             if !inside & (band.t0 > g_best.t) {
                 walking = false;
@@ -258,8 +258,8 @@ fn linear(v: View, vr: ViewRay, iv: Interval) {
                     for (; e <= mr.hi - mr.lo && step(2u, e); e++) {
                         let m = select(mr.hi - e, mr.lo + e, minor_forward);
                         var span = band;
-                        clip_interval(&span, hs_lo(minor, boundary(v, m)), vr);
-                        clip_interval(&span, hs_hi(minor, boundary(v, m + 1u)), vr);
+                        clip_interval(&span, view_lo(v, minor, boundary(v, m)), vr);
+                        clip_interval(&span, view_hi(v, minor, boundary(v, m + 1u)), vr);
                         if !is_empty(span) {
                             let i = select(m, k, major == 0u);
                             let j = select(k, m, major == 0u);

@@ -33,6 +33,11 @@ struct View {
     // View::slot: this view's block in the per-tile buffers; NO_SLOT = no content.
     slot: u32,
     adjacency: vec4<u32>,
+    // View::ortho: 1 for an orthographic view (dirt_math::view).
+    ortho: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // dirt_math::RayStats (16 bytes)

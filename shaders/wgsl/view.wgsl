@@ -32,6 +32,15 @@ fn view_ray(v: View, ray: Ray) -> ViewRay {
     return ViewRay(o, d, EPS_RAY_REL * (m + 2.0 * v.scale));
 }
 
+// dirt_math::View::w: the divisor of image coordinates at depth z (the depth
+// clamped to near/2 in a perspective view, exactly 1 in an orthographic one).
+fn view_w(v: View, z: f32) -> f32 {
+    if v.ortho != 0u {
+        return 1.0;
+    }
+    return fmax(z, v.near * 0.5);
+}
+
 // Slope of tile boundary k.
 fn boundary(v: View, k: u32) -> f32 {
     return f32(k) * v.step - v.tan;

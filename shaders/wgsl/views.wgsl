@@ -4,7 +4,7 @@
 //   bounds     one thread per triangle: the scene bounds (atomic min/max of the
 //              ordered encoding) and the first non-finite triangle;
 //   views      one thread: each view's apex, planes, eps and scale from the
-//              bounds, as dirt_math::ViewSet::cube / single compute them;
+//              bounds, as dirt_math::ViewSet::cube / single / ortho compute them;
 //   reach      one thread per (triangle, view): which views a triangle reaches;
 //   leave_out  one thread: views no triangle reaches get no slot.
 // Slots are sparse here (slot = view index): the per-view blocks are sized
@@ -21,13 +21,14 @@
 // dirt_gpu::ViewsParams
 struct ViewsParams {
     n_tris: u32,
-    // 0 = cube, 1 = single.
+    // 0 = cube, 1 = single, 2 = one orthographic view, 3 = two split.
     kind: u32,
     // 1: `center` is given (the cube's centre, or the single view's eye).
     has_center: u32,
     tri_shift: u32, // triangles per chunk: 2^tri_shift (tris.wgsl)
     center: vec3<f32>,
-    _pad1: u32,
+    // The axis orthographic views look along: 0, 1, 2, or 3 for the bounds' thinnest.
+    axis: u32,
 }
 
 // dirt_gpu::FrameState (its first words)
@@ -164,6 +165,60 @@ fn views_from_bounds() {
             let t = views[f];
             let apex = vec3<f32>(center[0] - t.forward[0] * near, center[1] - t.forward[1] * near, center[2] - t.forward[2] * near);
             views[f] = fit_view(t, apex, near, lo, hi, f);
+        }
+    } else if params.kind >= 2u {
+        // dirt_math::ViewSet::ortho.
+        let e = vec3<f32>(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+        let r = fmax(length3(e) * 0.5, 1.17549435e-38);
+        var a = params.axis;
+        if a > 2u {
+            // Axis::thinnest (single_axis: ties go to z, then y).
+            a = 2u;
+            if e[0] < e[1] && e[0] < e[2] {
+                a = 0u;
+            } else if e[1] < e[2] {
+                a = 1u;
+            }
+        }
+        var t = views[0];
+        var fwd = vec3<f32>(0.0, 0.0, 0.0);
+        fwd[a] = 1.0;
+        // (right, up) for x: (-z, y); y: (x, -z); z: (x, y). Zeros made
+        // positive, as the CPU's constants have them (a GPU may pick either
+        // sign of a zero here).
+        t.right = positive_zeros(select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, -1.0), a == 0u));
+        t.up = positive_zeros(select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, -1.0), a == 1u));
+        t.forward = positive_zeros(fwd);
+        t.ortho = 1u;
+        let pad = r * (1.0 / 32.0);
+        let back = 0.5 * e[a] + 2.0 * pad;
+        let apex = vec3<f32>(c[0] - fwd[0] * back, c[1] - fwd[1] * back, c[2] - fwd[2] * back);
+        var cross = 0.0;
+        for (var k = 0u; k < 3u; k++) {
+            if k != a {
+                cross = fmax(cross, e[k]);
+            }
+        }
+        let half = fmax(0.5 * cross, pad) * (1.0 + 1.0 / 1024.0);
+        t.tan = half;
+        t.step = div_cr(2.0 * half, f32(t.tiles));
+        let near = fmax(pad, 1.17549435e-38);
+        if params.kind == 2u {
+            views[0] = fit_view(t, apex, near, lo, hi, 0u);
+        } else {
+            var cut = c[a];
+            if params.has_center == 1u {
+                cut = params.center[a];
+            }
+            var hi1 = hi;
+            hi1[a] = fmax(fmin(hi[a], cut), lo[a]);
+            var lo2 = lo;
+            lo2[a] = fmin(fmax(lo[a], cut), hi[a]);
+            let first = fit_view(t, apex, near, lo, hi1, 0u);
+            var at = lo;
+            at[a] = lo2[a];
+            views[0] = first;
+            views[1] = fit_view(t, apex, fmax(to_view(first, at)[2], near), lo2, hi, 1u);
         }
     } else {
         var t = views[0];

@@ -234,8 +234,7 @@ pub fn param_matrix(resolution: u32) -> Vec<AdsParams> {
 }
 
 /// The orthographic sets (one view, then two split) at `resolution`, on
-/// each `(B, S)` pair, looking along the bounds' thinnest axis (CPU backend
-/// only: the GPU refuses them).
+/// each `(B, S)` pair, looking along the bounds' thinnest axis.
 pub fn ortho_params(resolution: u32, pairs: [(u32, u32); 3]) -> Vec<AdsParams> {
     [ViewsKind::Ortho, ViewsKind::OrthoSplit]
         .into_iter()
@@ -363,7 +362,7 @@ pub fn grid(n: u32, size: f32, z0: f32) -> Vec<Triangle> {
 }
 
 /// The reduced matrix of the robustness cases: views {cube, single} × three
-/// (B, S) pairs, then {ortho, ortho2} × three (CPU only); `trace` is then run with both traversals. `center` is used for
+/// (B, S) pairs, then {ortho, ortho2} × three; `trace` is then run with both traversals. `center` is used for
 /// the cube only (a single view with a centre sees only its frustum).
 pub fn robust_matrix(resolution: u32, center: Option<Vec3>) -> Vec<AdsParams> {
     let mut out = Vec::new();

@@ -5,6 +5,7 @@ use dirt_core::{AdsParams, Traversal, ViewsKind};
 use dirt_cpu::{Ads, trace_with_stats};
 use dirt_gpu::testing::{any_gpu, current_test_name, exact_gpu};
 use dirt_gpu::{GpuAds, TraceResources};
+use dirt_math::view::Axis;
 use dirt_math::{Ray, Triangle, Vec3};
 use dirt_tests::{adversarial_rays, random_scene};
 use proptest::prelude::*;
@@ -89,24 +90,28 @@ fn compare(
     Ok(())
 }
 
+const KINDS: [ViewsKind; 4] = [
+    ViewsKind::Cube,
+    ViewsKind::Single,
+    ViewsKind::Ortho,
+    ViewsKind::OrthoSplit,
+];
+
 fn params_strategy() -> impl Strategy<Value = AdsParams> {
     (
-        prop::bool::ANY,
+        prop::sample::select(KINDS.to_vec()),
         prop::sample::select(vec![8u32, 16, 24, 32]),
         prop::sample::select(vec![1u32, 2, 8, 32]),
         prop::sample::select(vec![1u32, 2, 4]),
+        prop::option::of(prop::sample::select(Axis::ALL.to_vec())),
     )
-        .prop_map(|(cube, res, buckets, tile)| AdsParams {
-            views: if cube {
-                ViewsKind::Cube
-            } else {
-                ViewsKind::Single
-            },
+        .prop_map(|(views, res, buckets, tile, axis)| AdsParams {
+            views,
             resolution: res,
             buckets,
             tile: if res % tile == 0 { tile } else { 1 },
             center: None,
-            axis: None,
+            axis: axis.filter(|_| views.is_ortho()),
         })
 }
 
@@ -125,7 +130,7 @@ fn builtin_scenes_gpu_equals_cpu() {
     for name in ["cornell", "layers"] {
         let scene = dirt_scene::builtin(name).expect("built-in");
         let rays = adversarial_rays(&scene.triangles, 40, 9);
-        for views in [ViewsKind::Cube, ViewsKind::Single] {
+        for views in KINDS {
             let params = AdsParams {
                 views,
                 resolution: 64,
@@ -205,34 +210,6 @@ fn rays_over_the_gpu_work_budget_are_continued_exactly() {
         ch[1].bits(),
         dirt_cpu::brute_force::trace(&tris, &rays[1..])[0].bits()
     );
-}
-
-/// Orthographic views are built on the CPU backend only: the GPU refuses
-/// them, by name, on the host build and on a frame structure alike.
-#[test]
-fn orthographic_views_are_refused_with_a_clear_error() {
-    let Some(g) = any_gpu("orthographic_views_are_refused_with_a_clear_error") else {
-        return;
-    };
-    let tris = random_scene(1, 10, 1.0);
-    for views in [ViewsKind::Ortho, ViewsKind::OrthoSplit] {
-        let params = AdsParams {
-            views,
-            resolution: 16,
-            buckets: 4,
-            ..AdsParams::default()
-        };
-        for e in [
-            GpuAds::build(g, &tris, &params).expect_err("refused"),
-            GpuAds::frame(g, &params, 16).expect_err("refused"),
-        ] {
-            assert!(
-                matches!(e, dirt_gpu::GpuError::NotOnGpu(v) if v == views),
-                "{e}"
-            );
-            assert!(e.to_string().contains("CPU backend only"), "{e}");
-        }
-    }
 }
 
 /// A structure larger than every binding of the device together is refused

@@ -11,6 +11,7 @@ use dirt_cpu::{Ads, trace_with_stats};
 use dirt_gpu::testing::{current_test_name, exact_gpu};
 use dirt_gpu::trace::STRUCTURE_FULL;
 use dirt_gpu::{Gpu, GpuAds, GpuMesh, TraceResources};
+use dirt_math::view::Axis;
 use dirt_math::{Hit, Ray, RayStats, Triangle, Vec3};
 use dirt_tests::{adversarial_rays, random_scene, read_buffer};
 use proptest::prelude::*;
@@ -220,24 +221,31 @@ fn check_frame(
     compare_structure(g, &ads, &cpu)
 }
 
+const KINDS: [ViewsKind; 4] = [
+    ViewsKind::Cube,
+    ViewsKind::Single,
+    ViewsKind::Ortho,
+    ViewsKind::OrthoSplit,
+];
+
 fn params_strategy() -> impl Strategy<Value = AdsParams> {
     (
-        prop::bool::ANY,
+        prop::sample::select(KINDS.to_vec()),
         prop::sample::select(vec![8u32, 16, 32]),
         prop::sample::select(vec![1u32, 2, 8]),
         prop::option::of((-2.0f32..2.0, -2.0f32..2.0, -2.0f32..2.0)),
+        prop::option::of(prop::sample::select(Axis::ALL.to_vec())),
     )
-        .prop_map(|(cube, res, buckets, center)| AdsParams {
-            views: if cube {
-                ViewsKind::Cube
-            } else {
-                ViewsKind::Single
-            },
+        .prop_map(|(views, res, buckets, center, axis)| AdsParams {
+            views,
             resolution: res,
             buckets,
             tile: 1,
-            center: center.map(|(x, y, z)| Vec3::new(x, y, z)),
-            axis: None,
+            // One orthographic view takes no centre (the split's is its cut).
+            center: center
+                .map(|(x, y, z)| Vec3::new(x, y, z))
+                .filter(|_| views != ViewsKind::Ortho),
+            axis: axis.filter(|_| views.is_ortho()),
         })
 }
 
@@ -268,7 +276,7 @@ proptest! {
 fn builtin_scenes_built_in_a_frame_equal_the_cpu() {
     for name in ["cornell", "layers"] {
         let scene = dirt_scene::builtin(name).expect("built-in");
-        for views in [ViewsKind::Cube, ViewsKind::Single] {
+        for views in KINDS {
             let params = AdsParams {
                 views,
                 resolution: 32,

@@ -123,6 +123,11 @@ fn view_clip_and_walk_setup_equal_cpu() {
                 resolution: 32,
                 ..Default::default()
             },
+            dirt_core::AdsParams {
+                views: dirt_core::ViewsKind::OrthoSplit,
+                resolution: 32,
+                ..Default::default()
+            },
         ] {
             let vs = dirt_core::views_for(&scene.triangles, &params).expect("views");
             let mut input = Vec::new();

@@ -67,7 +67,11 @@ fn shared_structs_match_their_wgsl() {
             step,
             scale,
             slot,
-            adjacency
+            adjacency,
+            ortho,
+            _pad0,
+            _pad1,
+            _pad2
         }),
     );
     check(
@@ -149,7 +153,7 @@ fn shared_structs_match_their_wgsl() {
             has_center,
             tri_shift,
             center,
-            _pad1
+            axis
         }),
     );
     check(

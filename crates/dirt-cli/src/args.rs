@@ -61,7 +61,6 @@ pub struct Given {
 #[derive(Debug, Args)]
 pub struct AdsArgs {
     /// Views covering the scene [default: the cost model's choice; with --fixed, cube].
-    /// ortho and ortho2 (orthographic views) are built on the CPU backend only.
     #[arg(long, value_enum, default_value_t = AdsParams::default().views, hide_default_value = true)]
     pub views: ViewsKind,
     /// Face resolution in pixels (square faces) [default: the cost model's choice; with --fixed, 128].
@@ -173,11 +172,10 @@ impl AdsArgs {
         };
         let raw = if !placed.is_empty() {
             placed
-        } else if g.views || limits.is_some() {
-            // The GPU passes build perspective views only.
-            dirt_cpu::cost::candidates(&base, !g.views)
+        } else if g.views {
+            dirt_cpu::cost::candidates(&base, false)
         } else {
-            dirt_cpu::cost::candidates_cpu(&base, &scene.triangles)
+            dirt_cpu::cost::candidates_all(&base, &scene.triangles)
         };
         let cands: Vec<AdsParams> = raw
             .into_iter()

@@ -309,10 +309,8 @@ pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
 /// [`candidates`] with both perspective kinds, and with no centre given the
 /// orthographic sets too, looking along `base.axis` or the bounds' thinnest
 /// axis (000 §5.3): one view, and two split at each of [`ortho_cuts`]. Every
-/// kind the CPU backend builds, each exact for every ray. The GPU passes
-/// build perspective views only, so a choice for the GPU is made among
-/// [`candidates`].
-pub fn candidates_cpu(base: &AdsParams, tris: &[Triangle]) -> Vec<AdsParams> {
+/// kind both backends build, each exact for every ray.
+pub fn candidates_all(base: &AdsParams, tris: &[Triangle]) -> Vec<AdsParams> {
     let mut out = candidates(
         &AdsParams {
             axis: None,
@@ -344,7 +342,7 @@ pub fn candidates_cpu(base: &AdsParams, tris: &[Triangle]) -> Vec<AdsParams> {
     out
 }
 
-/// Where [`candidates_cpu`] cuts the split orthographic views along `axis`:
+/// Where [`candidates_all`] cuts the split orthographic views along `axis`:
 /// the spatial median (the centre of `bounds`), then, where they differ from
 /// it, the object median (the median of the triangles' centroids) and the
 /// point halfway between. MacDonald and Booth showed that the best cut lies
@@ -856,7 +854,7 @@ mod tests {
             axis: Some(Axis::X),
             ..AdsParams::default()
         };
-        let all = candidates_cpu(&along_x, &tris);
+        let all = candidates_all(&along_x, &tris);
         let split: Vec<Option<Vec3>> = all
             .iter()
             .filter(|p| p.views == ViewsKind::OrthoSplit && p.resolution == 8 && p.buckets == 4)
@@ -866,7 +864,7 @@ mod tests {
         assert_eq!(split, vec![None, at(2.0), at(3.5)]);
         assert!(all.iter().any(|p| p.views == ViewsKind::Ortho));
         assert_eq!(
-            candidates_cpu(&AdsParams::default(), &tris).len(),
+            candidates_all(&AdsParams::default(), &tris).len(),
             all.len() - 2 * 18
         );
         assert!(all.iter().all(|p| p.validate().is_ok()));
@@ -875,7 +873,7 @@ mod tests {
             ..AdsParams::default()
         };
         assert!(
-            candidates_cpu(&placed, &tris)
+            candidates_all(&placed, &tris)
                 .iter()
                 .all(|p| !p.views.is_ortho())
         );

@@ -264,7 +264,7 @@ impl Tracer for DirtCpu {
             // placed there (one point of a view a ray): only those are weighed.
             let candidates = match self.origin {
                 Some(o) => cost::candidates_at(o, &bounds()),
-                None => cost::candidates_cpu(&AdsParams::default(), tris),
+                None => cost::candidates_all(&AdsParams::default(), tris),
             };
             // The caller's rays, else those traced, else generated ones.
             let given = self.sample.as_ref().or(self.seen_sample.as_ref());

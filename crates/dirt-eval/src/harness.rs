@@ -726,7 +726,7 @@ fn choose(
         all_rays.len() as u64,
         Traversal::HiZ,
         &dirt_cpu::cost::CostModel::CALIBRATED,
-        &dirt_cpu::cost::candidates_cpu(&AdsParams::default(), &prep.tris),
+        &dirt_cpu::cost::candidates_all(&AdsParams::default(), &prep.tris),
     )
     .map_err(|e| prep.build_err()(e.into()))?;
     let choose_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -113,9 +113,6 @@ impl GpuAds {
         entries_hint: u64,
     ) -> Result<GpuAds, GpuError> {
         params.validate()?;
-        if params.views.is_ortho() {
-            return Err(GpuError::NotOnGpu(params.views));
-        }
         let tiles = params.tiles();
         let n_views = params.views.view_count() as u32;
         let cells = crate::hiz_cells(tiles, n_views);
@@ -297,15 +294,16 @@ impl GpuAds {
         let center = self.params.center;
         let views_params = ViewsParams {
             n_tris,
-            // Orthographic views never reach here (GpuAds::frame refuses them).
             kind: match self.params.views {
                 ViewsKind::Cube => 0,
-                _ => 1,
+                ViewsKind::Single => 1,
+                ViewsKind::Ortho => 2,
+                ViewsKind::OrthoSplit => 3,
             },
+            axis: self.params.axis.map_or(3, |a| a.index() as u32),
             has_center: center.is_some() as u32,
             tri_shift: self.tris.shift(),
             center: center.map_or([0.0; 3], |c| c.to_array()),
-            ..Default::default()
         };
         gpu.queue
             .write_buffer(&frame.views_params, 0, bytemuck::bytes_of(&views_params));

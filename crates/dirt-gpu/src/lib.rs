@@ -64,7 +64,7 @@ pub use wgpu;
 
 use dirt_core::{AdsParams, BuildTimings, CoreError, IdLists};
 use dirt_math::dda::{hiz_levels, hiz_width};
-use dirt_math::{Triangle, ViewGpu, ViewSet, ViewsKind};
+use dirt_math::{Triangle, ViewGpu, ViewSet};
 use web_time::Instant;
 
 /// Errors of the GPU backend.
@@ -109,12 +109,6 @@ pub enum GpuError {
         bindings: u32,
         per_binding: u64,
     },
-    /// Views the GPU passes do not build: the orthographic sets are built
-    /// and traced on the CPU backend only.
-    #[error(
-        "{0} views are built on the CPU backend only (the GPU passes know perspective views): use the CPU backend, or cube or single views"
-    )]
-    NotOnGpu(ViewsKind),
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
     /// wgpu refused an allocation of the named step for lack of memory.
@@ -561,10 +555,6 @@ impl GpuAds {
         tris: &[Triangle],
         params: &AdsParams,
     ) -> Result<GpuAds, GpuError> {
-        params.validate()?;
-        if params.views.is_ortho() {
-            return Err(GpuError::NotOnGpu(params.views));
-        }
         let views = dirt_core::views_for(tris, params)?;
         let tiles = params.tiles();
         let n_views = views.views.len() as u32;
@@ -687,7 +677,13 @@ impl GpuAds {
 
     /// [`GpuAds::read_views`] without blocking (a browser page awaits it).
     pub async fn read_views_async(&self, gpu: &Gpu) -> Result<Vec<ViewGpu>, GpuError> {
-        let bytes = read_back_async(gpu, &self.views_uniform, 0, 6 * 96).await?;
+        let bytes = read_back_async(
+            gpu,
+            &self.views_uniform,
+            0,
+            6 * std::mem::size_of::<ViewGpu>() as u64,
+        )
+        .await?;
         Ok(bytemuck::pod_collect_to_vec::<u8, ViewGpu>(&bytes))
     }
 

@@ -102,14 +102,16 @@ pub struct PoolHeader {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ViewsParams {
     pub n_tris: u32,
-    /// 0 = cube, 1 = single.
+    /// 0 = cube, 1 = single, 2 = one orthographic view, 3 = two split.
     pub kind: u32,
     /// 1: `center` is given ([`dirt_core::AdsParams::center`]).
     pub has_center: u32,
     /// Triangles per chunk: `2^tri_shift`.
     pub tri_shift: u32,
     pub center: [f32; 3],
-    pub _pad1: u32,
+    /// The axis orthographic views look along ([`dirt_core::AdsParams::axis`]):
+    /// 0, 1, 2, or 3 for the bounds' thinnest.
+    pub axis: u32,
 }
 
 /// `struct FrameState` of `views.wgsl`: what the `views` stage reduces.

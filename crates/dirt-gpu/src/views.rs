@@ -10,6 +10,7 @@
 use crate::chunked::{Chunked, Split};
 use crate::fill_primitives::grid;
 use crate::{Gpu, bind_buffers, record_dispatch, with};
+use dirt_math::view::Axis;
 use dirt_math::{Aabb, Vec3, ViewGpu, ViewSet, ViewsKind};
 
 /// The views buffer before the first build: each view's axes, tan, tiles,
@@ -20,10 +21,13 @@ pub(crate) fn template(kind: ViewsKind, tiles: u32) -> [ViewGpu; 6] {
         min: Vec3::splat(-1.0),
         max: Vec3::splat(1.0),
     };
-    // Orthographic views never reach here (GpuAds::frame refuses them).
+    // The orthographic views' axes, image and step depend on the bounds:
+    // the stage sets them; the template gives their count, tiles and kind.
     let set = match kind {
         ViewsKind::Cube => ViewSet::cube(Vec3::ZERO, &unit, tiles),
-        _ => ViewSet::single(None, &unit, tiles),
+        ViewsKind::Single => ViewSet::single(None, &unit, tiles),
+        ViewsKind::Ortho => ViewSet::ortho(Axis::Z, None, &unit, tiles),
+        ViewsKind::OrthoSplit => ViewSet::ortho(Axis::Z, Some(0.0), &unit, tiles),
     };
     crate::views_gpu(&set)
 }

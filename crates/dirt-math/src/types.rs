@@ -266,7 +266,7 @@ impl Aabb {
 /// One view as the GPU passes read it (see [`crate::View`]), with the cube's
 /// adjacency (`adjacency[edge]` = the face across that edge; unused for a single view).
 ///
-/// repr(C), Pod, 96 bytes; matches WGSL `struct View` in `shaders/wgsl/types.wgsl`.
+/// repr(C), Pod, 112 bytes; matches WGSL `struct View` in `shaders/wgsl/types.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ViewGpu {
@@ -285,6 +285,11 @@ pub struct ViewGpu {
     /// [`crate::view::NO_SLOT`] for a view without content.
     pub slot: u32,
     pub adjacency: [u32; 4],
+    /// [`crate::View::ortho`] as 0 or 1.
+    pub ortho: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 impl ViewGpu {
@@ -303,6 +308,10 @@ impl ViewGpu {
             scale: v.scale,
             slot: v.slot,
             adjacency,
+            ortho: v.ortho as u32,
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
         }
     }
 }

@@ -20,7 +20,7 @@
 //! floating point.
 
 use crate::clip::HalfSpace;
-use crate::num::fmax;
+use crate::num::{fmax, fmin};
 use crate::types::{Aabb, Ray};
 use glam::Vec3;
 
@@ -65,7 +65,7 @@ pub struct View {
     /// view order; [`NO_SLOT`] for a view without content.
     pub slot: u32,
     /// Orthographic: tile boundaries are the planes `x = s`, `y = s`, not
-    /// `x = s·z`, `y = s·z` (module docs). Built on the CPU backend only.
+    /// `x = s·z`, `y = s·z` (module docs).
     pub ortho: bool,
 }
 
@@ -322,7 +322,7 @@ impl ViewsKind {
         }
     }
 
-    /// Orthographic views (built on the CPU backend only).
+    /// Orthographic views.
     pub fn is_ortho(self) -> bool {
         matches!(self, ViewsKind::Ortho | ViewsKind::OrthoSplit)
     }
@@ -514,27 +514,28 @@ impl ViewSet {
         let a = axis.index();
         let pad = r * (1.0 / 32.0);
         let apex = c - forward * (0.5 * e[a] + 2.0 * pad);
+        // num::fmax throughout: the views stage makes the same choices on the GPU.
         let cross = [e.x, e.y, e.z]
             .iter()
             .enumerate()
             .filter(|&(k, _)| k != a)
-            .fold(0.0f32, |m, (_, &x)| m.max(x));
-        let half = (0.5 * cross).max(pad) * (1.0 + 1.0 / 1024.0);
-        let near = pad;
+            .fold(0.0f32, |m, (_, &x)| fmax(m, x));
+        let half = fmax(0.5 * cross, pad) * (1.0 + 1.0 / 1024.0);
+        let near = fmax(pad, f32::MIN_POSITIVE);
         let views = match cut {
             None => vec![View::orthographic(
                 apex, right, up, forward, half, near, tiles, bounds,
             )],
             Some(k) => {
                 let (mut lo, mut hi) = (*bounds, *bounds);
-                lo.max[a] = lo.max[a].min(k).max(lo.min[a]);
-                hi.min[a] = hi.min[a].max(k).min(hi.max[a]);
+                lo.max[a] = fmax(fmin(lo.max[a], k), lo.min[a]);
+                hi.min[a] = fmin(fmax(hi.min[a], k), hi.max[a]);
                 let first = View::orthographic(apex, right, up, forward, half, near, tiles, &lo);
                 // The cut's depth as `to_view` computes it (the axes are unit
                 // axes, so the other terms are zeros).
                 let mut at = bounds.min;
                 at[a] = hi.min[a];
-                let near2 = first.to_view(at)[2].max(near);
+                let near2 = fmax(first.to_view(at)[2], near);
                 let second = View::orthographic(apex, right, up, forward, half, near2, tiles, &hi);
                 vec![first, second]
             }

@@ -223,7 +223,7 @@ fn choose_ads(
         Ads::Fixed(p) => return Ok((p, None)),
         Ads::Auto(p) => p,
     };
-    let candidates: Vec<AdsParams> = dirt_cpu::cost::candidates(&base, true)
+    let candidates: Vec<AdsParams> = dirt_cpu::cost::candidates_all(&base, &scene.triangles)
         .into_iter()
         .map(|c| AdsParams {
             tile: base.tile,

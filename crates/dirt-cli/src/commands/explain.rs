@@ -45,9 +45,9 @@ pub fn explain(
             (ViewsKind::Single, Some(_)) =>
                 "one view from the given eye: exact only for hits inside its frustum (use the cube for all rays)",
             (ViewsKind::Ortho, _) =>
-                "one orthographic view over the bounds sees all of them: exact for every ray (CPU backend only)",
+                "one orthographic view over the bounds sees all of them: exact for every ray",
             (ViewsKind::OrthoSplit, _) =>
-                "two orthographic views, split by a plane across the axis they look along, see all of the bounds: exact for every ray (CPU backend only)",
+                "two orthographic views, split by a plane across the axis they look along, see all of the bounds: exact for every ray",
         }
     );
 
@@ -58,7 +58,7 @@ pub fn explain(
     let mut cands = if given.views {
         candidates(params, false)
     } else {
-        dirt_cpu::cost::candidates_cpu(params, tris)
+        dirt_cpu::cost::candidates_all(params, tris)
     };
     if !cands.contains(params) {
         cands.push(*params);
