@@ -383,9 +383,10 @@ impl Check {
     }
 }
 
-/// The settings the tests measure [`check`] at: the cube at r32 B4 and one
-/// view at r64 B2 (small enough for a software adapter).
-pub fn check_params() -> [AdsParams; 2] {
+/// The settings the tests measure [`check`] at: the cube at r32 B4, one
+/// view at r64 B2 and the split orthographic views at r32 B4 (small enough
+/// for a software adapter).
+pub fn check_params() -> [AdsParams; 3] {
     [
         AdsParams {
             resolution: 32,
@@ -396,6 +397,12 @@ pub fn check_params() -> [AdsParams; 2] {
             views: dirt_math::ViewsKind::Single,
             resolution: 64,
             buckets: 2,
+            ..AdsParams::default()
+        },
+        AdsParams {
+            views: dirt_math::ViewsKind::OrthoSplit,
+            resolution: 32,
+            buckets: 4,
             ..AdsParams::default()
         },
     ]
