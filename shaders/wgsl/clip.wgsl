@@ -6,68 +6,65 @@
 #import view
 #import work
 
-// dirt_math::clip::HalfSpace as (kind, axis, s): kind 0 = Lo, 1 = Hi, 2 = Near (s = near), 3 = Far (s = far),
-// 4 = OrthoLo, 5 = OrthoHi.
+// dirt_math::clip::HalfSpace as (kind, axis, s, ortho): kind 0 = Lo, 1 = Hi, 2 = Near (s = near),
+// 3 = Far (s = far); Lo and Hi with ortho = 1 are OrthoLo and OrthoHi.
 struct HalfSpace {
     kind: u32,
     axis: u32,
     s: f32,
+    // 1 for a side of an orthographic view (dirt_math's OrthoLo and OrthoHi
+    // are kinds 0 and 1 here with this flag): its value is picked with a
+    // select, not a case of its own, so that a clip whose kind is known
+    // where it is written still compiles to one case (a kind chosen at run
+    // time put the whole switch into every clip of every loop, and
+    // SwiftShader's compiler did not finish).
+    ortho: u32,
 }
 
 fn hs_eval(h: HalfSpace, p: vec3<f32>, eps: f32) -> f32 {
+    let o = h.ortho != 0u;
     switch h.kind {
         case 0u: {
-            return p[h.axis] - h.s * p[2] + eps;
+            return select(p[h.axis] - h.s * p[2], p[h.axis] - h.s, o) + eps;
         }
         case 1u: {
-            return h.s * p[2] - p[h.axis] + eps;
+            return select(h.s * p[2] - p[h.axis], h.s - p[h.axis], o) + eps;
         }
         case 2u: {
             return p[2] - h.s + eps;
         }
-        case 3u: {
-            return h.s - p[2] + eps;
-        }
-        case 4u: {
-            return p[h.axis] - h.s + eps;
-        }
         default: {
-            return h.s - p[h.axis] + eps;
+            return h.s - p[2] + eps;
         }
     }
 }
 
 fn hs_slope(h: HalfSpace, d: vec3<f32>) -> f32 {
+    let o = h.ortho != 0u;
     switch h.kind {
         case 0u: {
-            return d[h.axis] - h.s * d[2];
+            return select(d[h.axis] - h.s * d[2], d[h.axis], o);
         }
         case 1u: {
-            return h.s * d[2] - d[h.axis];
+            return select(h.s * d[2] - d[h.axis], -d[h.axis], o);
         }
         case 2u: {
             return d[2];
         }
-        case 3u: {
-            return -d[2];
-        }
-        case 4u: {
-            return d[h.axis];
-        }
         default: {
-            return -d[h.axis];
+            return -d[2];
         }
     }
 }
 
 // dirt_math::View::lo: above tile boundary s of the view, on axis (0: x, 1: y).
 fn view_lo(v: View, axis: u32, s: f32) -> HalfSpace {
-    return HalfSpace(select(0u, 4u, v.ortho != 0u), axis, s);
+    return HalfSpace(0u, axis, s, v.ortho);
 }
 
 // dirt_math::View::hi: below tile boundary s of the view.
 fn view_hi(v: View, axis: u32, s: f32) -> HalfSpace {
-    return HalfSpace(select(1u, 5u, v.ortho != 0u), axis, s);
+    return HalfSpace(1u, axis, s, v.ortho);
 }
 
 // dirt_math::clip::Interval
@@ -129,10 +126,10 @@ fn view_halfspace(v: View, k: u32) -> HalfSpace {
             return view_hi(v, 1u, v.tan);
         }
         case 4u: {
-            return HalfSpace(2u, 0u, v.near);
+            return HalfSpace(2u, 0u, v.near, 0u);
         }
         default: {
-            return HalfSpace(3u, 0u, v.far);
+            return HalfSpace(3u, 0u, v.far, 0u);
         }
     }
 }

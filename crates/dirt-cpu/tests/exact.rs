@@ -159,7 +159,7 @@ fn auto_chooses_once_per_triangle_count_and_stays_exact() {
     assert_eq!(t.params, chosen);
     assert_eq!(
         choice.ranked.len() + choice.skipped,
-        dirt_cpu::cost::candidates_cpu(&AdsParams::default(), &tris).len()
+        dirt_cpu::cost::candidates_all(&AdsParams::default(), &tris).len()
     );
     // The winner built while choosing is the structure kept: no second build.
     assert_eq!(first.stages.len(), 1, "{:?}", first.stages);
