@@ -41,19 +41,26 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// Runs `f` `k` times (at least once); the median wall time in ms and the last result.
-pub fn timed<T, E>(k: u32, mut f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
+/// Runs `f` until `done` says so of the run times so far (in ms); the
+/// median wall time in ms and the last result.
+fn timed_until<T, E>(
+    mut f: impl FnMut() -> Result<T, E>,
+    done: impl Fn(&[f64]) -> bool,
+) -> Result<(f64, T), E> {
     let mut times = Vec::new();
-    let mut last;
     loop {
         let start = Instant::now();
-        last = f()?;
+        let last = f()?;
         times.push(ms(start.elapsed()));
-        if times.len() >= k.max(1) as usize {
-            break;
+        if done(&times) {
+            return Ok((median(times), last));
         }
     }
-    Ok((median(times), last))
+}
+
+/// Runs `f` `k` times (at least once); the median wall time in ms and the last result.
+pub fn timed<T, E>(k: u32, f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
+    timed_until(f, |times| times.len() >= k.max(1) as usize)
 }
 
 /// Least wall time, in ms, that [`timed_steady`] spends on one measurement.
@@ -67,19 +74,11 @@ pub const STEADY_RUNS: u32 = 11;
 /// of a fraction of a millisecond (a peer's build of a small scene, which
 /// also starts its thread pool) is mostly the noise, and varied tenfold
 /// from one evaluation to the next. Every backend is measured so.
-pub fn timed_steady<T, E>(k: u32, mut f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
-    let mut times = Vec::new();
-    let mut last;
-    loop {
-        let start = Instant::now();
-        last = f()?;
-        times.push(ms(start.elapsed()));
+pub fn timed_steady<T, E>(k: u32, f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
+    timed_until(f, |times| {
         let n = times.len() as u32;
-        if n >= k.max(1) && (n >= STEADY_RUNS || times.iter().sum::<f64>() >= STEADY_MS) {
-            break;
-        }
-    }
-    Ok((median(times), last))
+        n >= k.max(1) && (n >= STEADY_RUNS || times.iter().sum::<f64>() >= STEADY_MS)
+    })
 }
 
 /// Millions of rays per second for `rays` traced in `ms` milliseconds.
