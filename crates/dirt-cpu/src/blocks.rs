@@ -167,12 +167,12 @@ impl Budget {
     }
 
     /// Raises the budget by `n` items (for what the pass has shown the
-    /// structure will hold).
-    pub(crate) fn raise(&self, n: usize) {
+    /// structure will hold), to at most `ceiling`.
+    pub(crate) fn raise(&self, n: usize, ceiling: usize) {
         let _ = self
             .max
             .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |m| {
-                Some(m.saturating_add(n))
+                Some(m.saturating_add(n).min(ceiling))
             });
     }
 
@@ -278,5 +278,18 @@ mod tests {
             let room: usize = b.blocks.iter().map(|v| v.capacity() - v.len()).sum();
             assert_eq!(room, 0, "{n} items: trimmed");
         }
+    }
+
+    #[test]
+    fn a_raised_budget_stops_at_its_ceiling() {
+        let b = Budget::new(10);
+        b.raise(5, 100);
+        assert_eq!(b.room(), 15);
+        b.raise(1000, 100);
+        assert_eq!(b.room(), 100);
+        // A ceiling of 0 (nothing may be kept) keeps the budget at 0.
+        let none = Budget::new(0);
+        none.raise(1000, 0);
+        assert_eq!(none.room(), 0);
     }
 }

@@ -79,13 +79,14 @@ pub fn fill_depth_keeping(
             ]
         })
         .collect();
-    // Tiles and the groups' ends are kept as u32.
-    let keep_max = if u32::try_from(total).is_ok() {
-        keep_max.min(u32::MAX as usize - 1)
+    // Tiles and the groups' ends are kept as u32: the budget never passes
+    // `ceiling`, raised or not.
+    let ceiling = if u32::try_from(total).is_ok() {
+        u32::MAX as usize - 1
     } else {
         0
     };
-    let budget = Budget::new(keep_max);
+    let budget = Budget::new(keep_max.min(ceiling));
     let pieces = tris
         .par_chunks(PIECE)
         .map(|piece| {
@@ -128,7 +129,7 @@ pub fn fill_depth_keeping(
             // depth extent lies in its tile's bounds): the fragments found
             // show that the structure will be larger, and the budget of the
             // pieces after this one grows with them (peak_memory.rs).
-            budget.raise(seen / EARN);
+            budget.raise(seen / EARN, ceiling);
             budget.settle(found, keep)
         })
         .collect();
