@@ -83,8 +83,8 @@ pub struct AdsArgs {
     /// the cost model's choice. Every setting gives the same hits; only time and memory differ.
     #[arg(long, conflicts_with = "auto")]
     pub fixed: bool,
-    /// The cost model chooses the views (cube or single, both exact without --center),
-    /// resolution and B not given, from a sample of the rays (dirt_cpu::cost::auto).
+    /// The cost model chooses the views (cube, single, ortho or ortho2, all exact without
+    /// --center), resolution and B not given, from a sample of the rays (dirt_cpu::cost::auto).
     /// This is the default; the flag remains for scripts.
     #[arg(long)]
     pub auto: bool,
