@@ -225,6 +225,26 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
 
     let md = fs::read_to_string(&report).expect("report");
     assert!(md.contains("**DIRT: 0 rays differ**"), "{md}");
+    // A dynamic frame's build is timed once, the cost model's choice in it:
+    // "made in frame F's build (X ms of its Y ms" has X <= Y.
+    let mut choices = 0;
+    for (_, rest) in md
+        .match_indices("'s build (")
+        .map(|(i, _)| md.split_at(i + 10))
+    {
+        let mut ms = rest
+            .split(" ms")
+            .take(2)
+            .map(|x| x.trim().trim_start_matches("of its ").parse::<f64>());
+        if let (Some(Ok(choose)), Some(Ok(build))) = (ms.next(), ms.next()) {
+            assert!(
+                choose <= build,
+                "a choice longer than its build: {rest:.80}"
+            );
+            choices += 1;
+        }
+    }
+    assert!(choices > 0, "no dynamic choice noted: {md}");
     assert!(md.contains("| DIRT setting | choose ms |"), "{md}");
     assert!(md.contains("The fixed setting cube r128 B8 S1"), "{md}");
     assert!(

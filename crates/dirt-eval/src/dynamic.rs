@@ -16,7 +16,7 @@ use dirt_math::{Ray, Triangle, Vec3};
 use indicatif::ProgressBar;
 use serde::Serialize;
 
-use crate::measure::{self, StatsPass, median};
+use crate::measure::{self, Runs, StatsPass, median};
 use crate::peers::{Peer, unavailable};
 use crate::rays::{self, Camera, RayKind};
 use crate::{EvalError, Match, compare};
@@ -268,7 +268,7 @@ fn run_with(
         let n = TRUTH_RAYS.min(rays.len());
         let truth = dirt_cpu::brute_force::trace(&tris, &rays[..n]);
         for e in entries.iter_mut().filter(|e| !e.skipped) {
-            let built = measure::build(e.tracer.as_mut(), &tris, 1);
+            let built = measure::build(e.tracer.as_mut(), &tris, Runs::Once);
             let built = match built {
                 Ok(b) => b,
                 Err(err) if e.peer && unavailable(&err) => {
@@ -278,7 +278,7 @@ fn run_with(
                 }
                 Err(source) => return Err(build_err(&name, source)),
             };
-            let traced = measure::trace(e.tracer.as_mut(), &rays, 1, StatsPass::Prefix(0))
+            let traced = measure::trace(e.tracer.as_mut(), &rays, Runs::Once, StatsPass::Prefix(0))
                 .map_err(|source| EvalError::Trace {
                     scene: name.clone(),
                     source,

@@ -81,6 +81,34 @@ pub fn timed_steady<T, E>(k: u32, f: impl FnMut() -> Result<T, E>) -> Result<(f6
     })
 }
 
+/// How many times [`build`] and [`trace`] run what they time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Runs {
+    /// At least this many, and more while under [`STEADY_MS`] ([`timed_steady`]).
+    Steady(u32),
+    /// Exactly once: a frame of a dynamic scene, built and traced once as an
+    /// application does. Repeating its build would rebuild what the tracer
+    /// has just built, and the median of the repeats would hide a choice
+    /// made in the first of them.
+    Once,
+}
+
+impl From<u32> for Runs {
+    fn from(k: u32) -> Self {
+        Runs::Steady(k)
+    }
+}
+
+impl Runs {
+    /// Times `f` as often as `self` says: the median wall time in ms and the last result.
+    pub fn time<T, E>(self, f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
+        match self {
+            Runs::Steady(k) => timed_steady(k, f),
+            Runs::Once => timed(1, f),
+        }
+    }
+}
+
 /// Millions of rays per second for `rays` traced in `ms` milliseconds.
 pub fn mrays(rays: usize, ms: f64) -> f64 {
     if ms > 0.0 {
@@ -110,16 +138,17 @@ impl BuildMeasure {
     }
 }
 
-/// Builds `tracer` over `tris` `repeat` times (at least once): medians of the
-/// wall time and of each stage. The tracer keeps the last build.
+/// Builds `tracer` over `tris` as often as `runs` says (a count: at least
+/// that many times, [`Runs::Steady`]): medians of the wall time and of each
+/// stage. The tracer keeps the last build.
 pub fn build(
     tracer: &mut dyn Tracer,
     tris: &[Triangle],
-    repeat: u32,
+    runs: impl Into<Runs>,
 ) -> Result<BuildMeasure, CoreError> {
     let mut stages: Vec<(&'static str, Vec<f64>)> = Vec::new();
     let mut sums = Vec::new();
-    let (build_ms, report) = timed_steady(repeat, || {
+    let (build_ms, report) = runs.into().time(|| {
         let report = tracer.build(tris)?;
         for (name, d) in &report.stages {
             match stages.iter_mut().find(|(n, _)| n == name) {
@@ -206,12 +235,13 @@ impl TraceMeasure {
     }
 }
 
-/// Traces `rays` `repeat` times (at least once) through `tracer`; per-ray
-/// statistics as `pass` says when the tracer counts them.
+/// Traces `rays` through `tracer` as often as `runs` says (a count: at
+/// least that many times, [`Runs::Steady`]); per-ray statistics as `pass`
+/// says when the tracer counts them.
 pub fn trace(
     tracer: &mut dyn Tracer,
     rays: &[Ray],
-    repeat: u32,
+    runs: impl Into<Runs>,
     pass: StatsPass,
 ) -> Result<TraceMeasure, CoreError> {
     let counts = tracer.counts_stats();
@@ -221,7 +251,7 @@ pub fn trace(
     } else {
         Vec::new()
     };
-    let (trace_ms, report) = timed_steady(repeat, || {
+    let (trace_ms, report) = runs.into().time(|| {
         let s = (!stats.is_empty()).then_some(stats.as_mut_slice());
         tracer.trace_into(rays, &mut hits, s)
     })?;
@@ -519,6 +549,23 @@ mod tests {
         })
         .expect("runs");
         assert_eq!(n, 2);
+        // A frame: exactly one run, however short; a count: steady.
+        let mut n = 0;
+        Runs::Once
+            .time::<_, ()>(|| {
+                n += 1;
+                Ok(())
+            })
+            .expect("runs");
+        assert_eq!(n, 1);
+        let mut n = 0;
+        Runs::from(2)
+            .time::<_, ()>(|| {
+                n += 1;
+                Ok(())
+            })
+            .expect("runs");
+        assert_eq!(n, STEADY_RUNS);
         assert!(mrays(1, 0.0).is_infinite());
     }
 

@@ -232,7 +232,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "- Times are medians of at least {} runs, and of more (up to {}) until the runs of a measurement have taken {} ms (GPU: 1–2); builds and traces of every backend alike. Trace times cover all rays of a type; Mrays/s = rays / time.",
+        "- Times are medians of at least {} runs, and of more (up to {}) until the runs of a measurement have taken {} ms (GPU: 1–2); builds and traces of every backend alike, but for the dynamic scenes, whose every frame is built and traced once. Trace times cover all rays of a type; Mrays/s = rays / time.",
         res.repeat,
         crate::measure::STEADY_RUNS,
         crate::measure::STEADY_MS
