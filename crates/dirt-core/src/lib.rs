@@ -32,5 +32,6 @@ pub use lists::{BuildTimings, IdLists};
 pub use params::{AdsParams, Traversal};
 pub use tracer::{BuildReport, TraceReport, Tracer, check_lengths, trace_each};
 pub use views::{
-    LeftOutReason, LeftOutView, bounds_of, left_out_views, views_for, views_for_all, views_reached,
+    LeftOutReason, LeftOutView, bounds_of, first_non_finite, left_out_views, views_for,
+    views_for_all, views_reached,
 };

@@ -104,13 +104,41 @@ pub fn bounds_of(tris: &[Triangle]) -> Aabb {
         .reduce(|| Aabb::EMPTY, |a, b| a.union(&b))
 }
 
+/// The index of the first triangle with a coordinate that is not finite.
+/// Chunks are checked without a branch per triangle (the compiler vectorises
+/// the fold), and only a failing chunk is searched for the index: a
+/// per-triangle parallel search cost 0.5 ms on 32k triangles, a seventh of
+/// a deforming grid's rebuild.
+pub fn first_non_finite(tris: &[Triangle]) -> Option<usize> {
+    use rayon::prelude::*;
+    const CHUNK: usize = 4096;
+    tris.par_chunks(CHUNK)
+        .enumerate()
+        .find_map_first(|(c, chunk)| {
+            let finite = chunk.iter().fold(true, |ok, t| {
+                ok & t
+                    .v
+                    .as_flattened()
+                    .iter()
+                    .fold(true, |ok, x| ok & x.is_finite())
+            });
+            if finite {
+                None
+            } else {
+                chunk
+                    .iter()
+                    .position(|t| !t.is_finite())
+                    .map(|i| c * CHUNK + i)
+            }
+        })
+}
+
 /// [`views_for`] without leaving out the views no triangle reaches: every
 /// view whose frustum meets the scene bounds is built (the papers'
 /// configuration; the baseline that leaving out is measured against).
 pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CoreError> {
     params.validate()?;
-    use rayon::prelude::*;
-    if let Some(index) = tris.par_iter().position_first(|t| !t.is_finite()) {
+    if let Some(index) = first_non_finite(tris) {
         return Err(CoreError::NonFiniteTriangle { index });
     }
     let mut bounds = bounds_of(tris);
@@ -133,4 +161,36 @@ pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, C
             ViewSet::ortho(axis, cut, &bounds, tiles)
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_first_non_finite_triangle_is_found_across_chunks() {
+        let ok = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y);
+        for n in [0usize, 1, 4095, 4096, 4097, 9000] {
+            let tris = vec![ok; n];
+            assert_eq!(first_non_finite(&tris), None, "{n}");
+            for bad in [0, 1, 4095, 4096, 4097, 8191, 8192, 8999] {
+                if bad >= n {
+                    continue;
+                }
+                for x in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                    for c in [0, 4, 8] {
+                        let mut t = tris.clone();
+                        t[bad].v[c / 3][c % 3] = x;
+                        // A later bad triangle too: the first is named.
+                        if let Some(later) = t.get_mut(bad + 4100) {
+                            later.v[0][0] = f32::NAN;
+                        }
+                        let want = t.iter().position(|t| !t.is_finite());
+                        assert_eq!(want, Some(bad));
+                        assert_eq!(first_non_finite(&t), want, "n {n}, at {bad}, {x}");
+                    }
+                }
+            }
+        }
+    }
 }

@@ -129,7 +129,7 @@ impl Grid {
     }
 
     fn rebuild(&mut self, tris: &[Triangle]) -> Result<(), CoreError> {
-        if let Some(index) = tris.iter().position(|t| !t.is_finite()) {
+        if let Some(index) = dirt_core::first_non_finite(tris) {
             return Err(CoreError::NonFiniteTriangle { index });
         }
         self.tris.clear();
