@@ -144,6 +144,17 @@ fn scale3(a: vec3<f32>, s: f32) -> vec3<f32> {
     return vec3<f32>(a[0] * s, a[1] * s, a[2] * s);
 }
 
+// dirt_math::view::Axis::thinnest: the axis of the smallest extent (ties go
+// to z, then y), which the single view and the orthographic views look along.
+fn thinnest_axis(e: vec3<f32>) -> u32 {
+    if e[0] < e[1] && e[0] < e[2] {
+        return 0u;
+    } else if e[1] < e[2] {
+        return 1u;
+    }
+    return 2u;
+}
+
 @compute @workgroup_size(1)
 fn views_from_bounds() {
     var lo = vec3<f32>(ordered_to_f32(~atomicLoad(&state.bounds[0])), ordered_to_f32(~atomicLoad(&state.bounds[1])), ordered_to_f32(~atomicLoad(&state.bounds[2])));
@@ -172,13 +183,7 @@ fn views_from_bounds() {
         let r = fmax(length3(e) * 0.5, 1.17549435e-38);
         var a = params.axis;
         if a > 2u {
-            // Axis::thinnest (single_axis: ties go to z, then y).
-            a = 2u;
-            if e[0] < e[1] && e[0] < e[2] {
-                a = 0u;
-            } else if e[1] < e[2] {
-                a = 1u;
-            }
+            a = thinnest_axis(e);
         }
         var t = views[0];
         var fwd = vec3<f32>(0.0, 0.0, 0.0);
@@ -227,11 +232,11 @@ fn views_from_bounds() {
         let r = fmax(length3(vec3<f32>(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])) * 0.5, 1.17549435e-38);
         var fwd = vec3<f32>(0.0, 0.0, 1.0);
         if params.has_center == 0u {
-            // dirt_math::view::single_axis: the thinnest axis (ties: z, then y).
-            let e = vec3<f32>(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-            if e[0] < e[1] && e[0] < e[2] {
+            // dirt_math::view::single_axis.
+            let a = thinnest_axis(vec3<f32>(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]));
+            if a == 0u {
                 fwd = vec3<f32>(1.0, 0.0, 0.0);
-            } else if e[1] < e[2] {
+            } else if a == 1u {
                 fwd = vec3<f32>(0.0, 1.0, 0.0);
             }
             let dist = 1.5 * r + r;
