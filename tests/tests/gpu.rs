@@ -90,16 +90,9 @@ fn compare(
     Ok(())
 }
 
-const KINDS: [ViewsKind; 4] = [
-    ViewsKind::Cube,
-    ViewsKind::Single,
-    ViewsKind::Ortho,
-    ViewsKind::OrthoSplit,
-];
-
 fn params_strategy() -> impl Strategy<Value = AdsParams> {
     (
-        prop::sample::select(KINDS.to_vec()),
+        prop::sample::select(ViewsKind::ALL.to_vec()),
         prop::sample::select(vec![8u32, 16, 24, 32]),
         prop::sample::select(vec![1u32, 2, 8, 32]),
         prop::sample::select(vec![1u32, 2, 4]),
@@ -130,7 +123,7 @@ fn builtin_scenes_gpu_equals_cpu() {
     for name in ["cornell", "layers"] {
         let scene = dirt_scene::builtin(name).expect("built-in");
         let rays = adversarial_rays(&scene.triangles, 40, 9);
-        for views in KINDS {
+        for views in ViewsKind::ALL {
             let params = AdsParams {
                 views,
                 resolution: 64,

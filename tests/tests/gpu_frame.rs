@@ -221,16 +221,9 @@ fn check_frame(
     compare_structure(g, &ads, &cpu)
 }
 
-const KINDS: [ViewsKind; 4] = [
-    ViewsKind::Cube,
-    ViewsKind::Single,
-    ViewsKind::Ortho,
-    ViewsKind::OrthoSplit,
-];
-
 fn params_strategy() -> impl Strategy<Value = AdsParams> {
     (
-        prop::sample::select(KINDS.to_vec()),
+        prop::sample::select(ViewsKind::ALL.to_vec()),
         prop::sample::select(vec![8u32, 16, 32]),
         prop::sample::select(vec![1u32, 2, 8]),
         prop::option::of((-2.0f32..2.0, -2.0f32..2.0, -2.0f32..2.0)),
@@ -276,7 +269,7 @@ proptest! {
 fn builtin_scenes_built_in_a_frame_equal_the_cpu() {
     for name in ["cornell", "layers"] {
         let scene = dirt_scene::builtin(name).expect("built-in");
-        for views in KINDS {
+        for views in ViewsKind::ALL {
             let params = AdsParams {
                 views,
                 resolution: 32,

@@ -63,12 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let scene = dirt_scene::builtin(name).ok_or("unknown built-in scene")?;
         let tris = &scene.triangles;
         let sample = rays(&scene.bounds(), 20_000, 7);
-        for views in [
-            ViewsKind::Cube,
-            ViewsKind::Single,
-            ViewsKind::Ortho,
-            ViewsKind::OrthoSplit,
-        ] {
+        for views in ViewsKind::ALL {
             for resolution in [32, 64, 128, 256] {
                 for buckets in [1, 4, 8, 16, 32] {
                     let tile = 1;

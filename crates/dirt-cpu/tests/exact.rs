@@ -43,12 +43,7 @@ fn random_soup_matches_brute_force() {
     let rs = rays(4000, &tris, &mut rng);
     let truth = brute_force::trace(&tris, &rs);
     assert!(truth.iter().filter(|h| h.is_hit()).count() > 1000);
-    for views in [
-        ViewsKind::Cube,
-        ViewsKind::Single,
-        ViewsKind::Ortho,
-        ViewsKind::OrthoSplit,
-    ] {
+    for views in ViewsKind::ALL {
         for (res, tile) in [(32, 1), (64, 2), (64, 4)] {
             for buckets in [1, 8, 32] {
                 let ads = Ads::build(

@@ -303,7 +303,16 @@ impl Axis {
 }
 
 impl ViewsKind {
-    /// The name used on command lines and in reports: `cube` or `single`.
+    /// Every kind, in declaration order.
+    pub const ALL: [ViewsKind; 4] = [
+        ViewsKind::Cube,
+        ViewsKind::Single,
+        ViewsKind::Ortho,
+        ViewsKind::OrthoSplit,
+    ];
+
+    /// The name used on command lines and in reports: `cube`, `single`,
+    /// `ortho` or `ortho2`.
     pub fn name(self) -> &'static str {
         match self {
             ViewsKind::Cube => "cube",
