@@ -28,20 +28,30 @@ pub fn views_reached(views: &ViewSet, tris: &[Triangle]) -> Vec<bool> {
         .views
         .iter()
         .map(|v| {
+            let reaches = |t: &Triangle| {
+                let tv = [
+                    v.to_view(t.vertex(0)),
+                    v.to_view(t.vertex(1)),
+                    v.to_view(t.vertex(2)),
+                ];
+                clip_triangle_to_view(v, tv)
+                    .and_then(|p| polygon_tile_range(v, &p))
+                    .is_some()
+            };
+            // A view is nearly always reached by one of the first triangles:
+            // those are tried here, and only the rest (a view left out)
+            // goes to the pool, whose hand-over costs more than they do.
+            let (head, rest) = tris.split_at(tris.len().min(ON_CALLER));
             v.has_content
-                && tris.par_iter().any(|t| {
-                    let tv = [
-                        v.to_view(t.vertex(0)),
-                        v.to_view(t.vertex(1)),
-                        v.to_view(t.vertex(2)),
-                    ];
-                    clip_triangle_to_view(v, tv)
-                        .and_then(|p| polygon_tile_range(v, &p))
-                        .is_some()
-                })
+                && (head.iter().any(reaches) || (!rest.is_empty() && rest.par_iter().any(reaches)))
         })
         .collect()
 }
+
+/// Triangles a check of the build set-up runs through on the calling thread
+/// before it hands the rest to the thread pool: handing over and waiting
+/// costs tens of microseconds, a whole small scene's check less.
+const ON_CALLER: usize = 4096;
 
 /// Why a view was left out of the structure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,11 +105,15 @@ pub fn left_out_views(
         .collect())
 }
 
-/// [`Aabb::of_triangles`] on all threads: the union of the parts' bounds is
-/// the sequential bounds exactly ([`Aabb::union`]).
+/// [`Aabb::of_triangles`], on all threads past [`ON_CALLER`] triangles: the
+/// union of the parts' bounds is the sequential bounds exactly
+/// ([`Aabb::union`]).
 pub fn bounds_of(tris: &[Triangle]) -> Aabb {
     use rayon::prelude::*;
-    tris.par_chunks(4096)
+    if tris.len() <= ON_CALLER {
+        return Aabb::of_triangles(tris);
+    }
+    tris.par_chunks(ON_CALLER)
         .map(Aabb::of_triangles)
         .reduce(|| Aabb::EMPTY, |a, b| a.union(&b))
 }
@@ -111,26 +125,28 @@ pub fn bounds_of(tris: &[Triangle]) -> Aabb {
 /// a deforming grid's rebuild.
 pub fn first_non_finite(tris: &[Triangle]) -> Option<usize> {
     use rayon::prelude::*;
-    const CHUNK: usize = 4096;
-    tris.par_chunks(CHUNK)
-        .enumerate()
-        .find_map_first(|(c, chunk)| {
-            let finite = chunk.iter().fold(true, |ok, t| {
-                ok & t
-                    .v
-                    .as_flattened()
-                    .iter()
-                    .fold(true, |ok, x| ok & x.is_finite())
-            });
-            if finite {
-                None
-            } else {
-                chunk
-                    .iter()
-                    .position(|t| !t.is_finite())
-                    .map(|i| c * CHUNK + i)
-            }
-        })
+    const CHUNK: usize = ON_CALLER;
+    let check = |(c, chunk): (usize, &[Triangle])| {
+        let finite = chunk.iter().fold(true, |ok, t| {
+            ok & t
+                .v
+                .as_flattened()
+                .iter()
+                .fold(true, |ok, x| ok & x.is_finite())
+        });
+        if finite {
+            None
+        } else {
+            chunk
+                .iter()
+                .position(|t| !t.is_finite())
+                .map(|i| c * CHUNK + i)
+        }
+    };
+    if tris.len() <= CHUNK {
+        return check((0, tris));
+    }
+    tris.par_chunks(CHUNK).enumerate().find_map_first(check)
 }
 
 /// [`views_for`] without leaving out the views no triangle reaches: every
@@ -166,6 +182,88 @@ pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, C
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Triangles on both sides of the threshold below which the set-up's
+    /// checks stay on the calling thread.
+    const SIZES: [usize; 6] = [
+        0,
+        1,
+        ON_CALLER - 1,
+        ON_CALLER,
+        ON_CALLER + 1,
+        2 * ON_CALLER + 7,
+    ];
+
+    /// A small triangle at `p`.
+    fn speck(p: Vec3) -> Triangle {
+        Triangle::new(p, p + Vec3::X * 0.01, p + Vec3::Y * 0.01)
+    }
+
+    #[test]
+    fn bounds_on_the_caller_or_the_pool_are_the_sequential_bounds() {
+        for n in SIZES {
+            let tris: Vec<Triangle> = (0..n)
+                .map(|k| {
+                    let f = k as f32;
+                    speck(Vec3::new((f * 0.37).sin(), (f * 0.11).cos(), -0.0 * f))
+                })
+                .collect();
+            let (a, b) = (bounds_of(&tris), Aabb::of_triangles(&tris));
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            assert_eq!(
+                (bits(a.min), bits(a.max)),
+                (bits(b.min), bits(b.max)),
+                "{n}"
+            );
+        }
+    }
+
+    /// Which views a triangle past the first `ON_CALLER` reaches is found
+    /// as if every triangle were tried in turn.
+    #[test]
+    fn views_reached_tries_every_triangle() {
+        let bounds = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        let views = ViewSet::cube(Vec3::ZERO, &bounds, 8);
+        let reached_plainly = |tris: &[Triangle]| -> Vec<bool> {
+            views
+                .views
+                .iter()
+                .map(|v| {
+                    v.has_content
+                        && tris.iter().any(|t| {
+                            let tv = [0, 1, 2].map(|k| v.to_view(t.vertex(k)));
+                            clip_triangle_to_view(v, tv)
+                                .and_then(|p| polygon_tile_range(v, &p))
+                                .is_some()
+                        })
+                })
+                .collect()
+        };
+        for n in SIZES {
+            // Every triangle in front of the +x face only, then one in
+            // front of the -x face at the start, the end or past the head.
+            let tris = vec![speck(Vec3::new(0.9, 0.0, 0.0)); n];
+            let want = reached_plainly(&tris);
+            assert_eq!(views_reached(&views, &tris), want, "{n}");
+            assert!(
+                n == 0 || want.iter().filter(|&&r| r).count() < 6,
+                "{n}: a face is left out"
+            );
+            for at in [0, ON_CALLER - 1, ON_CALLER, n.saturating_sub(1)] {
+                if at >= n {
+                    continue;
+                }
+                let mut t = tris.clone();
+                t[at] = speck(Vec3::new(-0.9, 0.0, 0.0));
+                let want_here = reached_plainly(&t);
+                assert_ne!(want_here, want, "{n}, at {at}: the -x face is reached");
+                assert_eq!(views_reached(&views, &t), want_here, "{n}, at {at}");
+            }
+        }
+    }
 
     #[test]
     fn the_first_non_finite_triangle_is_found_across_chunks() {
