@@ -113,6 +113,8 @@ fn fill_keeping(
     let kept: Vec<Option<(Groups<u32>, bool)>> = frags
         .into_par_iter()
         .zip(tris.par_chunks(PIECE))
+        // A task a piece, as in fill_depth.
+        .with_max_len(1)
         .map(|(frags, piece)| {
             // Per triangle, the lists it joins, from its fragments: kept by
             // fill_depth, or found again. A piece whose fragments already
@@ -190,6 +192,7 @@ fn fill_keeping(
         };
         kept.into_par_iter()
             .zip(tris.par_chunks(PIECE))
+            .with_max_len(1)
             .enumerate()
             .for_each(|(p, (found, piece))| {
                 let first = p * PIECE;

@@ -338,7 +338,8 @@ impl Tracer for Grid {
 
     fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
         let start = web_time::Instant::now();
-        self.rebuild(tris)?;
+        // In the pool, as DIRT's build is: the same footing for the peer.
+        crate::in_pool(|| self.rebuild(tris))?;
         Ok(BuildReport {
             stages: vec![("grid", start.elapsed())],
             memory: Some(self.memory_bytes()),
@@ -357,6 +358,6 @@ impl Tracer for Grid {
             });
         }
         let g = &*self;
-        trace_each(rays, hits, stats.as_deref(), |r| g.trace_ray(r))
+        crate::in_pool(|| trace_each(rays, hits, stats.as_deref(), |r| g.trace_ray(r)))
     }
 }

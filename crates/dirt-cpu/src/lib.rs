@@ -79,16 +79,25 @@ pub struct Ads {
     pub triangles: usize,
 }
 
+/// Runs `f` on a thread of rayon's pool (the caller's own, if it is one).
+/// A build or trace is several parallel loops; each started from a thread
+/// outside the pool is handed over and waited for (18 µs on the 2-core
+/// machine of docs/RESULTS.md), each started inside it is pushed on a
+/// worker's own queue (2 µs): cornell's build was a third hand-overs.
+fn in_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    rayon::scope(|_| f())
+}
+
 impl Ads {
     /// Builds the structure: `fill_depth`, `mip_depth`, `fill_primitives`,
     /// over the views of [`views_for`] (views no triangle reaches left out).
     pub fn build(tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
-        Self::build_over(views_for(tris, params)?, tris, params)
+        in_pool(|| Self::build_over(views_for(tris, params)?, tris, params))
     }
 
     /// [`Ads::build`] over every view of [`views_for_all`]: nothing left out.
     pub fn build_all_views(tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
-        Self::build_over(views_for_all(tris, params)?, tris, params)
+        in_pool(|| Self::build_over(views_for_all(tris, params)?, tris, params))
     }
 
     fn build_over(views: ViewSet, tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
