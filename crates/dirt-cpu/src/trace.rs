@@ -61,18 +61,6 @@ pub fn trace_into(
     hits: &mut [Hit],
     stats: Option<&mut [RayStats]>,
 ) {
-    crate::in_pool(|| trace_pooled(ads, tris, rays, traversal, hits, stats));
-}
-
-/// [`trace_into`] on a thread of the pool.
-fn trace_pooled(
-    ads: &Ads,
-    tris: &[Triangle],
-    rays: &[Ray],
-    traversal: Traversal,
-    hits: &mut [Hit],
-    stats: Option<&mut [RayStats]>,
-) {
     let Some(sc) = Scene::new(ads, tris) else {
         // A view set or pyramid larger than the fast path's arrays.
         return plain_into(ads, tris, rays, traversal, hits, stats);

@@ -198,27 +198,9 @@ impl DirtCpu {
     }
 }
 
-impl Tracer for DirtCpu {
-    fn name(&self) -> String {
-        if self.choice().is_none() {
-            return format!("dirt-cpu ({})", self.traversal);
-        }
-        // Say what the cost model chose, since nobody gave it (the centre
-        // follows the origin, so it is read from the parameters in use).
-        let p = self.params;
-        let at = match p.center {
-            // The split orthographic views' centre is a point of their cut.
-            Some(c) if p.views.is_ortho() => format!(" cut through {},{},{}", c.x, c.y, c.z),
-            Some(_) => " at the rays' origin".to_string(),
-            None => String::new(),
-        };
-        format!(
-            "dirt-cpu ({}; the cost model's {} r{} B{} S{}{at})",
-            self.traversal, p.views, p.resolution, p.buckets, p.tile
-        )
-    }
-
-    fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
+impl DirtCpu {
+    /// [`Tracer::build`]'s work, on a thread of the pool.
+    fn rebuild(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
         self.ads = None;
         let mut stages = Vec::new();
         if let Some(o) = self.origin
@@ -314,6 +296,32 @@ impl Tracer for DirtCpu {
         let ads = Ads::build(tris, &self.params)?;
         stages.extend(ads.timings.stages());
         Ok(self.keep(ads, tris, stages))
+    }
+}
+
+impl Tracer for DirtCpu {
+    fn name(&self) -> String {
+        if self.choice().is_none() {
+            return format!("dirt-cpu ({})", self.traversal);
+        }
+        // Say what the cost model chose, since nobody gave it (the centre
+        // follows the origin, so it is read from the parameters in use).
+        let p = self.params;
+        let at = match p.center {
+            // The split orthographic views' centre is a point of their cut.
+            Some(c) if p.views.is_ortho() => format!(" cut through {},{},{}", c.x, c.y, c.z),
+            Some(_) => " at the rays' origin".to_string(),
+            None => String::new(),
+        };
+        format!(
+            "dirt-cpu ({}; the cost model's {} r{} B{} S{}{at})",
+            self.traversal, p.views, p.resolution, p.buckets, p.tile
+        )
+    }
+
+    fn build(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
+        // In the pool, with the choice's builds and sample traces.
+        crate::in_pool(|| self.rebuild(tris))
     }
 
     fn trace_into(
