@@ -9,7 +9,8 @@
 //! comparisons; no fused multiply-add), so each lane's result is
 //! [`intersect`]'s, bit for bit. The lanes also compute [`finish`]'s `t` and
 //! test its range, the best hit so far as the cap, so only candidates that
-//! could be kept reach the scalar rest.
+//! could be kept reach the scalar rest, nearest first: the first of them that
+//! is a hit ends the group (a farther one could not be kept).
 //!
 //! The closest hit does not depend on the order the candidates are tested
 //! in: [`intersect`] does not read the best hit, and [`Hit::closer_than`] is
@@ -105,17 +106,35 @@ pub(crate) fn intersect_closest_lanes(
     if !pass.iter().any(|&x| x) {
         return;
     }
-    for k in 0..LANES {
-        if !pass[k] {
-            continue;
-        }
+    // Nearest first, in the order `Hit::closer_than` keeps hits (`t`, then
+    // id): the `t` finish computes is the lane's, so once a lane is a hit
+    // (kept or not), no lane after it could be kept, and the rest are not
+    // finished. Stacked triangles pass several lanes of a group.
+    let mut left = pass;
+    while let Some(k) = nearest(&left, &t, &ids) {
+        left[k] = false;
         // The vertices relative to the origin in world axes, as finish
         // takes them: the same subtractions, so the same bits.
-        let t = tri[k];
-        let abc: [[f32; 3]; 3] = from_fn(|n| from_fn(|axis| t.v[n][axis] - o[axis]));
+        let v = &tri[k].v;
+        let abc: [[f32; 3]; 3] = from_fn(|n| from_fn(|axis| v[n][axis] - o[axis]));
         let hit = finish(ray, sh, tri[k], abc, [e0[k], e1[k], e2[k]], best.t);
-        keep_closest(hit, ids[k], best);
+        if hit.is_some() {
+            keep_closest(hit, ids[k], best);
+            return;
+        }
     }
+}
+
+/// The lane of `left` whose `(t, id)` comes first in `Hit::closer_than`'s order.
+#[inline(always)]
+fn nearest(left: &[bool; LANES], t: &L, ids: &[u32; LANES]) -> Option<usize> {
+    let mut best: Option<usize> = None;
+    for k in 0..LANES {
+        if left[k] && best.is_none_or(|b| t[k] < t[b] || (t[k] == t[b] && ids[k] < ids[b])) {
+            best = Some(k);
+        }
+    }
+    best
 }
 
 #[cfg(test)]
