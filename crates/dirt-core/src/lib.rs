@@ -30,7 +30,7 @@ pub use error::CoreError;
 pub use limits::{BindingLimits, SplitArray};
 pub use lists::{BuildTimings, IdLists};
 pub use params::{AdsParams, Traversal};
-pub use tracer::{BuildReport, TraceReport, Tracer, check_lengths, trace_each};
+pub use tracer::{BuildReport, RAYS_PER_TASK, TraceReport, Tracer, check_lengths, trace_each};
 pub use views::{
     LeftOutReason, LeftOutView, bounds_of, first_non_finite, left_out_views, views_for,
     views_for_all, views_reached,

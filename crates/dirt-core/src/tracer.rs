@@ -88,9 +88,14 @@ pub fn check_lengths(
     Ok(())
 }
 
+/// Most rays a task of a parallel trace takes.
+pub const RAYS_PER_TASK: usize = 512;
+
 /// The body of a [`Tracer::trace_into`] whose rays are independent and
 /// count no statistics: checks the lengths, then `hits[i] = closest(&rays[i])`
-/// on rayon's pool.
+/// on rayon's pool, at most [`RAYS_PER_TASK`] rays a task (rays differ in
+/// cost, and halves split only as rayon sees fit can leave one thread the
+/// dear ones), as `dirt_cpu::trace` takes them.
 pub fn trace_each(
     rays: &[Ray],
     hits: &mut [Hit],
@@ -101,6 +106,7 @@ pub fn trace_each(
     check_lengths(rays, hits, stats)?;
     rays.par_iter()
         .zip(hits.par_iter_mut())
+        .with_max_len(RAYS_PER_TASK)
         .for_each(|(r, h)| *h = closest(r));
     Ok(TraceReport::default())
 }

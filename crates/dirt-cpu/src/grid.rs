@@ -358,6 +358,6 @@ impl Tracer for Grid {
             });
         }
         let g = &*self;
-        trace_each(rays, hits, stats.as_deref(), |r| g.trace_ray(r))
+        crate::in_pool(|| trace_each(rays, hits, stats.as_deref(), |r| g.trace_ray(r)))
     }
 }

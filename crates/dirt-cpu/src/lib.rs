@@ -80,7 +80,7 @@ pub struct Ads {
 }
 
 /// Runs `f` on a thread of rayon's pool (the caller's own, if it is one).
-/// A build is several parallel loops; each started from a thread
+/// A build or trace is several parallel loops; each started from a thread
 /// outside the pool is handed over and waited for (18 µs on the 2-core
 /// machine of docs/RESULTS.md), each started inside it is pushed on a
 /// worker's own queue (2 µs): cornell's build was a third hand-overs.

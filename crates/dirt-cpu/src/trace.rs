@@ -19,7 +19,7 @@
 
 use crate::Ads;
 use crate::trace_fast::{self, Scene, Scratch};
-use dirt_core::{RayStats, Traversal};
+use dirt_core::{RAYS_PER_TASK, RayStats, Traversal};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
 use dirt_math::clip::{Interval, clip_ray_to_view, ray_depth};
 use dirt_math::dda::{HiZCell, Walk, child_order, projected_direction, walk_tiles};
@@ -61,6 +61,18 @@ pub fn trace_into(
     hits: &mut [Hit],
     stats: Option<&mut [RayStats]>,
 ) {
+    crate::in_pool(|| trace_pooled(ads, tris, rays, traversal, hits, stats));
+}
+
+/// [`trace_into`] on a thread of the pool.
+fn trace_pooled(
+    ads: &Ads,
+    tris: &[Triangle],
+    rays: &[Ray],
+    traversal: Traversal,
+    hits: &mut [Hit],
+    stats: Option<&mut [RayStats]>,
+) {
     let Some(sc) = Scene::new(ads, tris) else {
         // A view set or pyramid larger than the fast path's arrays.
         return plain_into(ads, tris, rays, traversal, hits, stats);
@@ -76,6 +88,7 @@ pub fn trace_into(
             Some(stats) => {
                 let out: Vec<(Hit, RayStats)> = sorted
                     .par_iter()
+                    .with_max_len(RAYS_PER_TASK)
                     .map_init(Scratch::new, |scratch, r| {
                         trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
                     })
@@ -88,6 +101,7 @@ pub fn trace_into(
             None => {
                 let out: Vec<Hit> = sorted
                     .par_iter()
+                    .with_max_len(RAYS_PER_TASK)
                     .map_init(Scratch::new, |scratch, r| {
                         trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
                     })
@@ -104,12 +118,14 @@ pub fn trace_into(
             .par_iter()
             .zip(hits.par_iter_mut())
             .zip(stats.par_iter_mut())
+            .with_max_len(RAYS_PER_TASK)
             .for_each_init(Scratch::new, |scratch, ((r, h), s)| {
                 (*h, *s) = trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
             }),
         None => rays
             .par_iter()
             .zip(hits.par_iter_mut())
+            .with_max_len(RAYS_PER_TASK)
             .for_each_init(Scratch::new, |scratch, (r, h)| {
                 *h = trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
             }),
