@@ -61,75 +61,66 @@ pub fn trace_into(
     hits: &mut [Hit],
     stats: Option<&mut [RayStats]>,
 ) {
-    crate::in_pool(|| trace_pooled(ads, tris, rays, traversal, hits, stats));
-}
-
-/// [`trace_into`] on a thread of the pool.
-fn trace_pooled(
-    ads: &Ads,
-    tris: &[Triangle],
-    rays: &[Ray],
-    traversal: Traversal,
-    hits: &mut [Hit],
-    stats: Option<&mut [RayStats]>,
-) {
-    let Some(sc) = Scene::new(ads, tris) else {
-        // A view set or pyramid larger than the fast path's arrays.
-        return plain_into(ads, tris, rays, traversal, hits, stats);
-    };
-    // Large batches run in a coherent order (nearby rays share cells, lists
-    // and triangles in cache); the results land in input order.
-    if let Some(order) = trace_fast::coherent_order(rays) {
-        let index = |o: &u64| (o & 0xffff_ffff) as usize;
-        // Gathered first: a loop of loads only overlaps the cache misses of
-        // reading rays out of order, which the walk would wait on one by one.
-        let sorted: Vec<Ray> = order.par_iter().map(|o| rays[index(o)]).collect();
-        match stats {
-            Some(stats) => {
-                let out: Vec<(Hit, RayStats)> = sorted
-                    .par_iter()
-                    .with_max_len(RAYS_PER_TASK)
-                    .map_init(Scratch::new, |scratch, r| {
-                        trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
-                    })
-                    .collect();
-                for (o, (h, s)) in order.iter().zip(out) {
-                    hits[index(o)] = h;
-                    stats[index(o)] = s;
+    // On a thread of the pool, so that each loop below starts there.
+    crate::in_pool(|| {
+        let Some(sc) = Scene::new(ads, tris) else {
+            // A view set or pyramid larger than the fast path's arrays.
+            return plain_into(ads, tris, rays, traversal, hits, stats);
+        };
+        // Large batches run in a coherent order (nearby rays share cells, lists
+        // and triangles in cache); the results land in input order.
+        if let Some(order) = trace_fast::coherent_order(rays) {
+            let index = |o: &u64| (o & 0xffff_ffff) as usize;
+            // Gathered first: a loop of loads only overlaps the cache misses of
+            // reading rays out of order, which the walk would wait on one by one.
+            let sorted: Vec<Ray> = order.par_iter().map(|o| rays[index(o)]).collect();
+            match stats {
+                Some(stats) => {
+                    let out: Vec<(Hit, RayStats)> = sorted
+                        .par_iter()
+                        .with_max_len(RAYS_PER_TASK)
+                        .map_init(Scratch::new, |scratch, r| {
+                            trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
+                        })
+                        .collect();
+                    for (o, (h, s)) in order.iter().zip(out) {
+                        hits[index(o)] = h;
+                        stats[index(o)] = s;
+                    }
+                }
+                None => {
+                    let out: Vec<Hit> = sorted
+                        .par_iter()
+                        .with_max_len(RAYS_PER_TASK)
+                        .map_init(Scratch::new, |scratch, r| {
+                            trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
+                        })
+                        .collect();
+                    for (o, h) in order.iter().zip(out) {
+                        hits[index(o)] = h;
+                    }
                 }
             }
-            None => {
-                let out: Vec<Hit> = sorted
-                    .par_iter()
-                    .with_max_len(RAYS_PER_TASK)
-                    .map_init(Scratch::new, |scratch, r| {
-                        trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
-                    })
-                    .collect();
-                for (o, h) in order.iter().zip(out) {
-                    hits[index(o)] = h;
-                }
-            }
+            return;
         }
-        return;
-    }
-    match stats {
-        Some(stats) => rays
-            .par_iter()
-            .zip(hits.par_iter_mut())
-            .zip(stats.par_iter_mut())
-            .with_max_len(RAYS_PER_TASK)
-            .for_each_init(Scratch::new, |scratch, ((r, h), s)| {
-                (*h, *s) = trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
-            }),
-        None => rays
-            .par_iter()
-            .zip(hits.par_iter_mut())
-            .with_max_len(RAYS_PER_TASK)
-            .for_each_init(Scratch::new, |scratch, (r, h)| {
-                *h = trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
-            }),
-    }
+        match stats {
+            Some(stats) => rays
+                .par_iter()
+                .zip(hits.par_iter_mut())
+                .zip(stats.par_iter_mut())
+                .with_max_len(RAYS_PER_TASK)
+                .for_each_init(Scratch::new, |scratch, ((r, h), s)| {
+                    (*h, *s) = trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
+                }),
+            None => rays
+                .par_iter()
+                .zip(hits.par_iter_mut())
+                .with_max_len(RAYS_PER_TASK)
+                .for_each_init(Scratch::new, |scratch, (r, h)| {
+                    *h = trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
+                }),
+        }
+    })
 }
 
 fn plain_into(
