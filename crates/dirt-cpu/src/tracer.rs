@@ -116,11 +116,12 @@ impl DirtCpu {
         self
     }
 
-    /// A tracer whose parameters the cost model chooses ([`cost::auto`]) for
-    /// frames of `rays_per_frame` rays: the library's default. The choice is
-    /// made at the first build, from a sample of rays leaving the triangles
+    /// A tracer whose parameters the cost model chooses ([`cost::auto_kept`])
+    /// for frames of `rays_per_frame` rays: the library's default. The choice
+    /// is made at the first build, from a sample of rays leaving the triangles
     /// ([`cost::sample_rays`]), and kept while the triangle count stays the
-    /// same (a deforming mesh keeps its choice; another scene gets a new one).
+    /// same (a deforming mesh keeps its choice; another scene gets a new one),
+    /// which is why it may search longer than a one-off choice ([`cost::auto`]).
     /// Its time is the build's first stage, `choose`; that build then keeps
     /// the winning candidate's structure, built while choosing, so its other
     /// stages are absent. With `traversal` `None`, the faster traversal
@@ -255,7 +256,7 @@ impl DirtCpu {
                 (None, Some(o)) => cost::sample_rays_from(o, tris, AUTO_SAMPLE, 1),
                 (None, None) => cost::sample_rays(tris, AUTO_SAMPLE, 1),
             };
-            let mut choice = cost::auto(
+            let mut choice = cost::auto_kept(
                 tris,
                 &sample,
                 rays_per_frame,
