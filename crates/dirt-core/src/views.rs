@@ -4,7 +4,7 @@
 use crate::{AdsParams, CoreError};
 use dirt_math::clip::{clip_triangle_to_view, polygon_tile_range};
 use dirt_math::view::Axis;
-use dirt_math::{Aabb, Triangle, Vec3, ViewSet, ViewsKind};
+use dirt_math::{Aabb, Triangle, Vec3, View, ViewSet, ViewsKind};
 
 /// Checks `params` and `tris` and makes the view set both backends build over.
 ///
@@ -28,16 +28,7 @@ pub fn views_reached(views: &ViewSet, tris: &[Triangle]) -> Vec<bool> {
         .views
         .iter()
         .map(|v| {
-            let reaches = |t: &Triangle| {
-                let tv = [
-                    v.to_view(t.vertex(0)),
-                    v.to_view(t.vertex(1)),
-                    v.to_view(t.vertex(2)),
-                ];
-                clip_triangle_to_view(v, tv)
-                    .and_then(|p| polygon_tile_range(v, &p))
-                    .is_some()
-            };
+            let reaches = |t: &Triangle| reaches(v, t);
             // A view is nearly always reached by one of the first triangles:
             // those are tried here, and only the rest (a view left out)
             // goes to the pool, whose hand-over costs more than they do.
@@ -46,6 +37,19 @@ pub fn views_reached(views: &ViewSet, tris: &[Triangle]) -> Vec<bool> {
                 && (head.iter().any(reaches) || (!rest.is_empty() && rest.par_iter().any(reaches)))
         })
         .collect()
+}
+
+/// Whether `t`, clipped to `v`'s (dilated) frustum, is not empty and has a
+/// tile range.
+fn reaches(v: &View, t: &Triangle) -> bool {
+    let tv = [
+        v.to_view(t.vertex(0)),
+        v.to_view(t.vertex(1)),
+        v.to_view(t.vertex(2)),
+    ];
+    clip_triangle_to_view(v, tv)
+        .and_then(|p| polygon_tile_range(v, &p))
+        .is_some()
 }
 
 /// Triangles a check of the build set-up runs through on the calling thread
@@ -105,7 +109,7 @@ pub fn left_out_views(
         .collect())
 }
 
-/// [`Aabb::of_triangles`], on all threads past [`ON_CALLER`] triangles: the
+/// [`Aabb::of_triangles`], on all threads past 4,096 triangles: the
 /// union of the parts' bounds is the sequential bounds exactly
 /// ([`Aabb::union`]).
 pub fn bounds_of(tris: &[Triangle]) -> Aabb {
@@ -231,15 +235,7 @@ mod tests {
             views
                 .views
                 .iter()
-                .map(|v| {
-                    v.has_content
-                        && tris.iter().any(|t| {
-                            let tv = [0, 1, 2].map(|k| v.to_view(t.vertex(k)));
-                            clip_triangle_to_view(v, tv)
-                                .and_then(|p| polygon_tile_range(v, &p))
-                                .is_some()
-                        })
-                })
+                .map(|v| v.has_content && tris.iter().any(|t| reaches(v, t)))
                 .collect()
         };
         for n in SIZES {
