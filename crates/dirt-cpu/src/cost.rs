@@ -590,8 +590,8 @@ pub struct AutoChoice {
 pub const AUTO_BUDGET: f64 = 0.25;
 
 /// [`AUTO_BUDGET`] of a choice that is kept for later frames and traces
-/// ([`auto_kept`]): two frames' worth. On the deforming grid at the camera
-/// (32k triangles) the quarter frame built only the first guess, single
+/// ([`auto_budgeted`], as `DirtCpu::auto` chooses): two frames' worth. On
+/// the deforming grid at the camera (32k triangles) the quarter frame built only the first guess, single
 /// r128 B8; this budget walks on to r128 B4, a frame of 5,000 rays 4.12 ->
 /// 3.80 ms and of 100,000 rays 19.0 -> 16.9 ms, for a few builds once.
 pub const KEPT_BUDGET: f64 = 2.0;
@@ -664,7 +664,7 @@ pub fn auto_within(
     candidates: &[AdsParams],
     limits: Option<BindingLimits>,
 ) -> Result<AutoChoice, CpuError> {
-    search(
+    auto_budgeted(
         tris,
         sample,
         rays_per_frame,
@@ -676,32 +676,10 @@ pub fn auto_within(
     )
 }
 
-/// [`auto`] for a choice that is kept for later frames and traces (what
-/// `DirtCpu::auto` makes): its search may spend [`KEPT_BUDGET`] of the best
-/// predicted frame, not [`AUTO_BUDGET`].
-pub fn auto_kept(
-    tris: &[Triangle],
-    sample: &[Ray],
-    rays_per_frame: u64,
-    traversal: Traversal,
-    model: &CostModel,
-    candidates: &[AdsParams],
-) -> Result<AutoChoice, CpuError> {
-    search(
-        tris,
-        sample,
-        rays_per_frame,
-        traversal,
-        model,
-        candidates,
-        None,
-        KEPT_BUDGET,
-    )
-}
-
-/// The search of [`auto_within`], spending at most `budget` of the best
-/// predicted frame on candidate builds.
-fn search(
+/// [`auto_within`] spending at most `budget` of the best predicted frame on
+/// candidate builds: [`AUTO_BUDGET`] for a one-off choice, [`KEPT_BUDGET`]
+/// for one kept for later frames and traces (what `DirtCpu::auto` makes).
+pub fn auto_budgeted(
     tris: &[Triangle],
     sample: &[Ray],
     rays_per_frame: u64,
@@ -1118,19 +1096,20 @@ mod tests {
         let tris = stack(40);
         let sample = sample_rays(&tris, 200, 1);
         let cands = candidates(&AdsParams::default(), true);
-        let run = |kept: bool| {
-            let f = if kept { auto_kept } else { auto };
-            f(
+        let run = |budget: f64| {
+            auto_budgeted(
                 &tris,
                 &sample,
                 1_000,
                 Traversal::HiZ,
                 &CostModel::CALIBRATED,
                 &cands,
+                None,
+                budget,
             )
             .expect("auto")
         };
-        let (once, kept) = (run(false), run(true));
+        let (once, kept) = (run(AUTO_BUDGET), run(KEPT_BUDGET));
         assert!(
             kept.ranked.len() > once.ranked.len(),
             "{} vs {}",

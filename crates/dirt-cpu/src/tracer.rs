@@ -116,9 +116,10 @@ impl DirtCpu {
         self
     }
 
-    /// A tracer whose parameters the cost model chooses ([`cost::auto_kept`])
-    /// for frames of `rays_per_frame` rays: the library's default. The choice
-    /// is made at the first build, from a sample of rays leaving the triangles
+    /// A tracer whose parameters the cost model chooses
+    /// ([`cost::auto_budgeted`] with [`cost::KEPT_BUDGET`]) for frames of
+    /// `rays_per_frame` rays: the library's default. The choice is made at
+    /// the first build, from a sample of rays leaving the triangles
     /// ([`cost::sample_rays`]), and kept while the triangle count stays the
     /// same (a deforming mesh keeps its choice; another scene gets a new one),
     /// which is why it may search longer than a one-off choice ([`cost::auto`]).
@@ -256,13 +257,15 @@ impl DirtCpu {
                 (None, Some(o)) => cost::sample_rays_from(o, tris, AUTO_SAMPLE, 1),
                 (None, None) => cost::sample_rays(tris, AUTO_SAMPLE, 1),
             };
-            let mut choice = cost::auto_kept(
+            let mut choice = cost::auto_budgeted(
                 tris,
                 &sample,
                 rays_per_frame,
                 self.traversal,
                 &CostModel::CALIBRATED,
                 &candidates,
+                None,
+                cost::KEPT_BUDGET,
             )?;
             self.params = choice.best.params;
             let built = choice.best_ads.take();
