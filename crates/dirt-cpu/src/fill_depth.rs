@@ -13,6 +13,7 @@
 //! every triangle twice.
 
 use crate::blocks::{Budget, Groups};
+use crate::cover_lanes::for_each_fragment_in;
 use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF, f32_to_ordered};
 use dirt_math::{Triangle, ViewSet};
@@ -100,12 +101,15 @@ pub fn fill_depth_keeping(
             // flight bounded by the budget, this stage's peak stays below
             // fill_primitives', whose lists cost at least as much).
             let room = budget.room();
-            let mut keep = room > 0;
-            let mut found = Groups::new();
-            let mut seen = 0usize;
-            for t in piece {
-                for_each_fragment(views, t, |tile, lo, hi| {
-                    seen += 1;
+            let keep = room > 0;
+            let found = Groups::new();
+            let mut st = (0usize, keep, found);
+            for_each_fragment_in(
+                views,
+                piece,
+                &mut st,
+                |(seen, keep, found), tile, lo, hi| {
+                    *seen += 1;
                     let e = &bounds[tile];
                     // A locked update only where it changes the bound: most
                     // fragments of a tile after its first do not (x86 has no
@@ -117,19 +121,22 @@ pub fn fill_depth_keeping(
                     if zhi > e[1].load(Ordering::Relaxed) {
                         e[1].fetch_max(zhi, Ordering::Relaxed);
                     }
-                    if keep {
+                    if *keep {
                         if found.len() < room {
                             found.push((tile as u32, lo, hi));
                         } else {
-                            keep = false;
-                            found = Groups::new();
+                            *keep = false;
+                            *found = Groups::new();
                         }
                     }
-                });
-                if keep {
-                    found.close();
-                }
-            }
+                },
+                |(_, keep, found)| {
+                    if *keep {
+                        found.close();
+                    }
+                },
+            );
+            let (seen, keep, found) = st;
             // Every fragment becomes at least one list node of 4 bytes (its
             // depth extent lies in its tile's bounds): the fragments found
             // show that the structure will be larger, and the budget of the

@@ -10,7 +10,8 @@
 
 use crate::CpuError;
 use crate::blocks::{Budget, Groups};
-use crate::fill_depth::{Fragments, PIECE, for_each_fragment};
+use crate::cover_lanes::for_each_fragment_in;
+use crate::fill_depth::{Fragments, PIECE};
 use dirt_core::IdLists;
 use dirt_math::bucket::bucket_range;
 use dirt_math::encode::ordered_to_f32;
@@ -37,17 +38,30 @@ fn for_each_bucket(
     }
 }
 
-/// Calls `f(list_index)` for every (tile, bucket) list triangle `t` belongs to.
-fn for_each_list(
+/// Calls `f(state, t, list_index)` for every (tile, bucket) list that
+/// triangle `t` of `tris` belongs to, triangles in order, and `end(state)`
+/// after each triangle's lists.
+fn for_each_list<S>(
     views: &ViewSet,
     depth: &[[u32; 2]],
     buckets: u32,
-    t: &Triangle,
-    mut f: impl FnMut(usize),
+    tris: &[Triangle],
+    state: &mut S,
+    mut f: impl FnMut(&mut S, usize, usize),
+    mut end: impl FnMut(&mut S),
 ) {
-    for_each_fragment(views, t, |tile, lo, hi| {
-        for_each_bucket(depth, buckets, (tile, lo, hi), &mut f);
-    });
+    for_each_fragment_in(
+        views,
+        tris,
+        &mut (state, 0usize),
+        |(state, t), tile, lo, hi| {
+            for_each_bucket(depth, buckets, (tile, lo, hi), |k| f(state, *t, k))
+        },
+        |(state, t)| {
+            end(state);
+            *t += 1;
+        },
+    );
 }
 
 /// Most list nodes the count pass keeps for the fill (per piece, the lists
@@ -141,12 +155,15 @@ fn fill_keeping(
                     },
                     |lists, _| lists.close(),
                 ),
-                None => {
-                    for t in piece {
-                        for_each_list(views, depth, buckets, t, |k| add(&mut lists, k));
-                        lists.close();
-                    }
-                }
+                None => for_each_list(
+                    views,
+                    depth,
+                    buckets,
+                    piece,
+                    &mut lists,
+                    |lists, _, k| add(lists, k),
+                    |lists| lists.close(),
+                ),
             }
             if !keep {
                 return None;
@@ -202,11 +219,15 @@ fn fill_keeping(
                         |_, t, k| put(k as usize, first + t),
                         |_, _| {},
                     ),
-                    None => {
-                        for (t, tri) in piece.iter().enumerate() {
-                            for_each_list(views, depth, buckets, tri, |k| put(k, first + t));
-                        }
-                    }
+                    None => for_each_list(
+                        views,
+                        depth,
+                        buckets,
+                        piece,
+                        &mut (),
+                        |_, t, k| put(k, first + t),
+                        |_| {},
+                    ),
                 }
             });
     }

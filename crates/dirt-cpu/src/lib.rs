@@ -23,6 +23,7 @@ mod blocks;
 pub mod brute_force;
 pub mod cache;
 pub mod cost;
+mod cover_lanes;
 pub mod fill_depth;
 pub mod fill_primitives;
 pub mod grid;

@@ -432,14 +432,26 @@ fn clip_pair<'a>(
 /// function clips against the tile's x planes, then its y planes, so the
 /// polygon clipped to column `i`'s x planes is computed once per column and
 /// only the y planes are applied per tile. Tiles are visited column by column.
-pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32, u32, f32, f32)) {
+pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], f: impl FnMut(u32, u32, f32, f32)) {
     let mut poly = Polygon::EMPTY;
     if !clip_triangle_to_view_into(v, tri, &mut poly) {
         return;
     }
-    let Some((i0, i1, j0, j1)) = polygon_tile_range(v, &poly) else {
+    let Some(range) = polygon_tile_range(v, &poly) else {
         return;
     };
+    cover_tiles(v, &poly, range, f);
+}
+
+/// The rest of [`for_each_covered_tile`]: the tiles of the range
+/// `(i0, i1, j0, j1)` ([`polygon_tile_range`]) of the view-clipped polygon
+/// `poly`, with their extents, in its order.
+pub fn cover_tiles(
+    v: &View,
+    poly: &Polygon,
+    (i0, i1, j0, j1): (u32, u32, u32, u32),
+    mut f: impl FnMut(u32, u32, f32, f32),
+) {
     // Scratch polygons for the per-tile clips: written only as far as used,
     // and never copied (each clip reads one and writes the next).
     let (mut a, mut b, mut lo, mut hi) = (
@@ -451,10 +463,10 @@ pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], mut f: impl FnMut(u32
     for i in i0..=i1 {
         // One column: no x planes (tile_depth_extent).
         let column = if i0 == i1 {
-            &poly
+            poly
         } else {
             let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
-            let p = clip_pair(&poly, [&lo_x, &hi_x], v.eps, &mut lo, &mut hi);
+            let p = clip_pair(poly, [&lo_x, &hi_x], v.eps, &mut lo, &mut hi);
             if p.len == 0 {
                 continue;
             }
