@@ -11,13 +11,16 @@
 //!
 //! A triangle inside the frustum whose range is one tile gets that tile's
 //! fragment from the lanes (the depth range of its vertices, as
-//! [`cover_tiles`] computes it for a range of one tile); one inside the
-//! frustum over several tiles goes on to [`cover_tiles`] from its range; one
+//! [`cover_tiles`] computes it for a range of one tile). One whose range is
+//! two tiles, side by side or one above the other, gets each tile's part
+//! from [`two_tiles`]: the one clip a tile takes there, at the middle
+//! boundary, written for a triangle (no polygon copied, only the components
+//! used). One over more tiles goes on to [`cover_tiles`] from its range; one
 //! that crosses the frustum is covered by [`for_each_covered_tile`] alone.
-//! Small triangles, one tile each, are most of a deforming grid's or a
-//! finely tessellated model's, and there the prologue was most of the
-//! coverage's cost. The tests below check that the fragments, their order
-//! and their bits are [`for_each_fragment`]'s on random triangles and views.
+//! On a deforming grid of small triangles nine in ten take the first two
+//! ways, and the prologue and those clips were most of the coverage's cost.
+//! The tests below check that the fragments, their order and their bits
+//! are [`for_each_fragment`]'s on random triangles and views.
 //!
 //! [`View::to_view`]: dirt_math::View::to_view
 //! [`clip_triangle_to_view_into`]: dirt_math::clip::clip_triangle_to_view_into
@@ -39,13 +42,20 @@ type L = [f32; LANES];
 /// Most views of a set ([`ViewSet::cube`]'s six).
 const MAX_VIEWS: usize = 6;
 
+/// A tile `(i, j)` and a triangle's depth extent there, if it reaches it.
+type TilePart = (u32, u32, Option<(f32, f32)>);
+
 /// What the lanes found for one triangle in one view.
 #[derive(Clone, Copy, Debug)]
 enum Cover {
-    /// Inside the frustum, touching no tile.
+    /// No fragment: outside a plane of the frustum, or inside it but
+    /// touching no tile.
     Nothing,
     /// Inside the frustum, in one tile: `(i, j, zlo, zhi)`.
     One(u32, u32, f32, f32),
+    /// Inside the frustum, over two tiles (side by side or one above the
+    /// other): each tile with the triangle's depth extent there, if any.
+    Two([TilePart; 2]),
     /// Inside the frustum, over the tile range `(i0, i1, j0, j1)`.
     Range(u32, u32, u32, u32),
     /// Crossing the frustum: to be clipped to it.
@@ -80,13 +90,24 @@ fn cover_lanes(v: &View, tri: &[[L; 3]; 3], covers: &mut [Cover; LANES], tv: &mu
         *tv = [dot(v.right), dot(v.up), dot(v.forward)];
     }
     let tv = &*tv;
-    // clip_triangle_to_view_into's test: every vertex inside every plane.
-    let mut inside = [true; LANES];
+    // clip_triangle_to_view_into: every vertex inside every plane leaves the
+    // triangle as it is; else the planes clip in order, and the first that
+    // has a vertex outside empties it if it has every vertex outside (the
+    // triangle reaches it unchanged). Then the view gets nothing of it.
+    let mut cut = [false; LANES];
+    let mut outside = [false; LANES];
     for h in &view_frustum(v) {
-        for p in tv {
-            let f = eval_lanes(h, p, v.eps);
-            inside = from_fn(|k| inside[k] & (f[k] >= 0.0));
-        }
+        let f = [
+            eval_lanes(h, &tv[0], v.eps),
+            eval_lanes(h, &tv[1], v.eps),
+            eval_lanes(h, &tv[2], v.eps),
+        ];
+        let all_in: [bool; LANES] =
+            from_fn(|k| (f[0][k] >= 0.0) & (f[1][k] >= 0.0) & (f[2][k] >= 0.0));
+        let all_out: [bool; LANES] =
+            from_fn(|k| !(f[0][k] >= 0.0) & !(f[1][k] >= 0.0) & !(f[2][k] >= 0.0));
+        outside = from_fn(|k| outside[k] | (!cut[k] & all_out[k]));
+        cut = from_fn(|k| cut[k] | !all_in[k]);
     }
     // Polygon::depth_range of the triangle: folds from ±inf in vertex order.
     let mut zlo = [f32::INFINITY; LANES];
@@ -117,23 +138,130 @@ fn cover_lanes(v: &View, tri: &[[L; 3]; 3], covers: &mut [Cover; LANES], tv: &mu
         yhi = from_fn(|k| fmax(yhi[k], y[k]));
     }
     let (tiles, last) = (v.tiles as f32, v.tiles - 1);
-    *covers = from_fn(|k| {
-        if !inside[k] {
-            return Cover::Clip;
-        }
-        let d = delta[k];
-        if !(xhi[k] + d >= 0.0 && yhi[k] + d >= 0.0 && xlo[k] - d <= tiles && ylo[k] - d <= tiles) {
-            return Cover::Nothing;
-        }
-        let (i0, i1) = (floor_index(xlo[k] - d, last), floor_index(xhi[k] + d, last));
-        let (j0, j1) = (floor_index(ylo[k] - d, last), floor_index(yhi[k] + d, last));
-        if i0 == i1 && j0 == j1 {
+    let d = delta;
+    let met: [bool; LANES] = from_fn(|k| {
+        xhi[k] + d[k] >= 0.0
+            && yhi[k] + d[k] >= 0.0
+            && xlo[k] - d[k] <= tiles
+            && ylo[k] - d[k] <= tiles
+    });
+    let i0: [u32; LANES] = from_fn(|k| floor_index(xlo[k] - d[k], last));
+    let i1: [u32; LANES] = from_fn(|k| floor_index(xhi[k] + d[k], last));
+    let j0: [u32; LANES] = from_fn(|k| floor_index(ylo[k] - d[k], last));
+    let j1: [u32; LANES] = from_fn(|k| floor_index(yhi[k] + d[k], last));
+    // A loop, not `from_fn`: that closure was left out of line.
+    for (k, cover) in covers.iter_mut().enumerate() {
+        let (i0, i1, j0, j1) = (i0[k], i1[k], j0[k], j1[k]);
+        // Two tiles: side by side, or one above the other.
+        let two = (i0 + 1 == i1 && j0 == j1) || (i0 == i1 && j0 + 1 == j1);
+        *cover = if outside[k] {
+            Cover::Nothing
+        } else if cut[k] {
+            Cover::Clip
+        } else if !met[k] {
+            Cover::Nothing
+        } else if i0 == i1 && j0 == j1 {
             // cover_tiles on a range of one tile: the unclipped extent.
             Cover::One(i0, j0, zlo[k] - v.eps, zhi[k] + v.eps)
+        } else if two
+            // The lower tile's index on the axis the range is split along.
+            && let (x_split, lower) = if i0 != i1 { (true, i0) } else { (false, j0) }
+            && let (Some(a), Some(b)) = two_tiles(v, tv, k, x_split, lower)
+        {
+            Cover::Two([(i0, j0, a), (i1, j1, b)])
         } else {
             Cover::Range(i0, i1, j0, j1)
+        };
+    }
+}
+
+/// The triangle's part in one tile as the lanes see it: `None` where it
+/// takes a clip they do not follow (then [`cover_tiles`] covers the
+/// triangle), else its depth extent there, if it reaches the tile.
+type Part = Option<Option<(f32, f32)>>;
+
+/// [`cover_tiles`] on a range of two tiles for lane `k`: the lower tile
+/// (index `lower` on the split axis: x where `x_split`, else y) and the
+/// upper. There each tile's part is the triangle clipped to the tile's two
+/// planes on that axis, then its depth range. The range's margin leaves the
+/// triangle inside the plane at its outer edge, so one real clip a tile is
+/// left, at the middle boundary, followed here as [`Polygon::clip_into`]
+/// makes it: its output vertices in order as slots (`v0, x01, v1, x12, v2,
+/// x20`: each vertex where it is inside, each crossing edge's
+/// intersection), the depth range folded over them in that order. A clip
+/// at an outer edge that would change the polygon makes the part `None`.
+///
+/// [`Polygon::clip_into`]: dirt_math::clip::Polygon::clip_into
+#[inline(always)]
+fn two_tiles(v: &View, tv: &[[L; 3]; 3], k: usize, x_split: bool, lower: u32) -> (Part, Part) {
+    let eps = v.eps;
+    // HalfSpace::eval of the split axis' Lo and Hi at slope (or offset) `s`.
+    let lo = |s: f32, a: f32, z: f32| {
+        if v.ortho {
+            a - s + eps
+        } else {
+            a - s * z + eps
         }
-    });
+    };
+    let hi = |s: f32, a: f32, z: f32| {
+        if v.ortho {
+            s - a + eps
+        } else {
+            s * z - a + eps
+        }
+    };
+    // Polygon::clip_into of the triangle `(a, z)` by the plane valued `f` at its vertices.
+    let clip = |f: [f32; 3], a: [f32; 3], z: [f32; 3]| -> [(bool, f32, f32); 6] {
+        from_fn(|s| {
+            let (n, m) = (s / 2, (s / 2 + 1) % 3);
+            if s % 2 == 0 {
+                (f[n] >= 0.0, a[n], z[n])
+            } else {
+                let w = f[n] / (f[n] - f[m]);
+                (
+                    (f[n] >= 0.0) != (f[m] >= 0.0),
+                    a[n] + (a[m] - a[n]) * w,
+                    z[n] + (z[m] - z[n]) * w,
+                )
+            }
+        })
+    };
+    // Polygon::depth_range, widened by eps as cover_tiles does.
+    let extent = |slots: &[(bool, f32, f32); 6]| -> Option<(f32, f32)> {
+        let (mut zlo, mut zhi, mut any) = (f32::INFINITY, f32::NEG_INFINITY, false);
+        for &(kept, _, z) in slots {
+            if kept {
+                (zlo, zhi, any) = (fmin(zlo, z), fmax(zhi, z), true);
+            }
+        }
+        any.then_some((zlo - eps, zhi + eps))
+    };
+    let c = if x_split { 0 } else { 1 };
+    let a: [f32; 3] = from_fn(|n| tv[n][c][k]);
+    let z: [f32; 3] = from_fn(|n| tv[n][2][k]);
+    // View::boundary of the lower tile's edges.
+    let b: [f32; 3] = from_fn(|e| (lower + e as u32) as f32 * v.step - v.tan);
+    // The lower tile: its outer plane (nothing or everything inside), then the middle.
+    let outer: [f32; 3] = from_fn(|n| lo(b[0], a[n], z[n]));
+    let first = if outer.iter().all(|&f| f >= 0.0) {
+        Some(extent(&clip(from_fn(|n| hi(b[1], a[n], z[n])), a, z)))
+    } else if outer.iter().all(|&f| !(f >= 0.0)) {
+        Some(None)
+    } else {
+        None
+    };
+    // The upper tile: the middle plane, then its outer plane on what is left.
+    let slots = clip(from_fn(|n| lo(b[1], a[n], z[n])), a, z);
+    let kept = slots.iter().filter(|s| s.0);
+    let inside = kept.clone().filter(|s| hi(b[2], s.1, s.2) >= 0.0).count();
+    let second = if inside == kept.count() {
+        Some(extent(&slots))
+    } else if inside == 0 {
+        Some(None)
+    } else {
+        None
+    };
+    (first, second)
 }
 
 /// [`for_each_fragment`](crate::fill_depth::for_each_fragment) for every
@@ -175,6 +303,13 @@ pub(crate) fn for_each_fragment_in<S>(
                 match covers[f][k] {
                     Cover::Nothing => {}
                     Cover::One(i, j, lo, hi) => emit(i, j, lo, hi),
+                    Cover::Two(parts) => {
+                        for (i, j, extent) in parts {
+                            if let Some((lo, hi)) = extent {
+                                emit(i, j, lo, hi);
+                            }
+                        }
+                    }
                     Cover::Range(i0, i1, j0, j1) => {
                         let poly = Polygon::triangle(vertex(0), vertex(1), vertex(2));
                         cover_tiles(v, &poly, (i0, i1, j0, j1), emit);
@@ -290,9 +425,37 @@ mod tests {
     }
 
     #[test]
+    fn two_tiles_leaves_a_clip_at_an_outer_edge_to_cover_tiles() {
+        // A view-space triangle over tiles 7, 8 and 9 of an orthographic
+        // view (x from 7.3 to 9.5 tiles): asked as if its range were two
+        // tiles, the lanes must decline the part whose outer plane cuts it.
+        let views = view_set(2, 16, Vec3::ZERO);
+        let v = &views.views[0];
+        let x = |tiles: f32| v.boundary(0) + tiles * v.step;
+        let (z0, y) = (0.5 * (v.near + v.far), x(3.5));
+        let corner = [
+            [x(7.3), y, z0],
+            [x(9.5), y, z0 + 0.1],
+            [x(8.0), x(3.8), z0 + 0.2],
+        ];
+        let tv: [[L; 3]; 3] = from_fn(|n| from_fn(|c| [corner[n][c]; LANES]));
+        let part = |lower: u32| two_tiles(v, &tv, 0, true, lower);
+        // Tiles 8 and 9: tile 8's outer plane (x = 8 tiles) cuts.
+        assert!(part(8).0.is_none(), "{:?}", part(8));
+        // Tiles 7 and 8: tile 7 is clipped at 8 only; tile 8's outer plane (9) cuts.
+        let (a, b) = part(7);
+        assert!(matches!(a, Some(Some(_))), "{a:?}");
+        assert!(b.is_none(), "{b:?}");
+        // Tiles 10 and 11: the triangle is wholly below both.
+        assert_eq!(part(10), (Some(None), Some(None)));
+    }
+
+    #[test]
     fn every_kind_of_cover_is_taken() {
-        // A one-tile, a many-tile, a crossing and an outside triangle in one
-        // single view, so that each arm above is exercised.
+        // A one-tile, a many-tile, a crossing and an outside triangle (wholly
+        // outside the first plane that has a vertex outside), and
+        // two across a tile boundary, in one view, so that each arm above is
+        // exercised.
         let views = view_set(2, 16, Vec3::ZERO);
         let v = &views.views[0];
         let t = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| {
@@ -303,6 +466,9 @@ mod tests {
             t([-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 0.5, 1.0]),
             t([-9.0, 0.0, 0.0], [0.0, 0.0, 0.1], [0.0, 0.3, 0.2]),
             t([9.0, 9.0, 9.0], [9.5, 9.0, 9.0], [9.0, 9.5, 9.0]),
+            // Across the boundary at 0 on one axis, inside one tile on the other.
+            t([-0.1, 0.0, 0.05], [0.1, 0.0, 0.05], [0.0, 0.2, 0.1]),
+            t([0.05, 0.0, -0.1], [0.05, 0.0, 0.1], [0.1, 0.2, 0.0]),
         ];
         let tri: [[L; 3]; 3] =
             from_fn(|n| from_fn(|c| from_fn(|k| tris[k.min(tris.len() - 1)].v[n][c])));
@@ -311,11 +477,14 @@ mod tests {
         assert!(matches!(covers[0], Cover::One(..)), "{:?}", covers[0]);
         assert!(matches!(covers[1], Cover::Range(..)), "{:?}", covers[1]);
         assert!(matches!(covers[2], Cover::Clip), "{:?}", covers[2]);
-        assert!(
-            matches!(covers[3], Cover::Clip | Cover::Nothing),
-            "{:?}",
-            covers[3]
-        );
+        assert!(matches!(covers[3], Cover::Nothing), "{:?}", covers[3]);
+        for k in [4, 5] {
+            assert!(
+                matches!(covers[k], Cover::Two([(_, _, Some(_)), (_, _, Some(_))])),
+                "{:?}",
+                covers[k]
+            );
+        }
         assert_eq!(lanes(&views, &tris), plain(&views, &tris));
     }
 }
