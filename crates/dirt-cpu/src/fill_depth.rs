@@ -30,7 +30,8 @@ const EARN: usize = 2;
 /// Calls `f(tile, zlo, zhi)` for every tile of every view with content that
 /// triangle `t` touches (`tile` indexes the depth bounds), with its
 /// conservative depth extent there: views in order, then
-/// [`for_each_covered_tile`]'s order.
+/// [`for_each_covered_tile`]'s order. The stage's definition; the build runs
+/// it eight triangles at a time ([`crate::cover_lanes`], the same fragments).
 pub(crate) fn for_each_fragment(views: &ViewSet, t: &Triangle, mut f: impl FnMut(usize, f32, f32)) {
     for v in &views.views {
         if v.has_content {
@@ -101,9 +102,8 @@ pub fn fill_depth_keeping(
             // flight bounded by the budget, this stage's peak stays below
             // fill_primitives', whose lists cost at least as much).
             let room = budget.room();
-            let keep = room > 0;
-            let found = Groups::new();
-            let mut st = (0usize, keep, found);
+            // Fragments seen, whether the piece still keeps them, and those kept.
+            let mut st = (0usize, room > 0, Groups::new());
             for_each_fragment_in(
                 views,
                 piece,
