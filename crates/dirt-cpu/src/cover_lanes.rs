@@ -117,21 +117,15 @@ fn cover_lanes(v: &View, tri: &[[L; 3]; 3], covers: &mut [Cover; LANES], tv: &mu
         zhi = from_fn(|k| fmax(zhi[k], p[2][k]));
     }
     // polygon_tile_range.
-    let w = |z: L| -> L {
-        if v.ortho {
-            [1.0; LANES]
-        } else {
-            from_fn(|k| fmax(z[k], v.near * 0.5))
-        }
-    };
+    let w = |z: L| -> L { from_fn(|k| v.w(z[k])) };
     let z = w(zlo);
     let delta: L = from_fn(|k| v.eps / z[k] / v.step + 1.0 / 256.0);
     let (mut xlo, mut xhi) = ([f32::INFINITY; LANES], [f32::NEG_INFINITY; LANES]);
     let (mut ylo, mut yhi) = (xlo, xhi);
     for p in tv {
         let pz = w(p[2]);
-        let x: L = from_fn(|k| (p[0][k] / pz[k] + v.tan) / v.step);
-        let y: L = from_fn(|k| (p[1][k] / pz[k] + v.tan) / v.step);
+        let x: L = from_fn(|k| v.tile_coord(p[0][k] / pz[k]));
+        let y: L = from_fn(|k| v.tile_coord(p[1][k] / pz[k]));
         xlo = from_fn(|k| fmin(xlo[k], x[k]));
         xhi = from_fn(|k| fmax(xhi[k], x[k]));
         ylo = from_fn(|k| fmin(ylo[k], y[k]));
@@ -239,8 +233,8 @@ fn two_tiles(v: &View, tv: &[[L; 3]; 3], k: usize, x_split: bool, lower: u32) ->
     let c = if x_split { 0 } else { 1 };
     let a: [f32; 3] = from_fn(|n| tv[n][c][k]);
     let z: [f32; 3] = from_fn(|n| tv[n][2][k]);
-    // View::boundary of the lower tile's edges.
-    let b: [f32; 3] = from_fn(|e| (lower + e as u32) as f32 * v.step - v.tan);
+    // The lower tile's edges.
+    let b: [f32; 3] = from_fn(|e| v.boundary(lower + e as u32));
     // The lower tile: its outer plane (nothing or everything inside), then the middle.
     let outer: [f32; 3] = from_fn(|n| lo(b[0], a[n], z[n]));
     let first = if outer.iter().all(|&f| f >= 0.0) {
