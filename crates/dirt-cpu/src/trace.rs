@@ -63,10 +63,13 @@ pub fn trace_into(
 ) {
     // On a thread of the pool, so that each loop below starts there.
     crate::in_pool(|| {
-        let Some(sc) = Scene::new(ads, tris) else {
+        let Some(mut sc) = Scene::new(ads, tris) else {
             // A view set or pyramid larger than the fast path's arrays.
             return plain_into(ads, tris, rays, traversal, hits, stats);
         };
+        if stats.is_none() {
+            sc.cull_by_depth(rays);
+        }
         // Large batches run in a coherent order (nearby rays share cells, lists
         // and triangles in cache); the results land in input order.
         if let Some(order) = trace_fast::coherent_order(rays) {
