@@ -60,18 +60,18 @@
 //!   first ([`triangle_depths`]: its vertices' view-space depths, widened by
 //!   twice the view's `eps`), and a listed triangle whose range misses the
 //!   ray's depth span in the tile is not tested there (the eval's cornell
-//!   rays, every kind in one batch: about half of the tests). That changes no hit: where the plain stage finds
-//!   the closest hit, in the tile that holds the hit point, the point's depth
-//!   lies in the ray's span there (the span the buckets are chosen by) and in
-//!   the triangle's range (the fragments' depths are clipped from the same
-//!   vertices; the margin covers both roundings), so the triangle is tested
-//!   there; a triangle left out is not entered in the mailbox; and until the
-//!   closest hit is found, the walk's termination tests compare with a `t`
-//!   no smaller than its own, so they do not stop it earlier. Testing fewer
-//!   candidates that still hold the closest gives the same closest. Rays from
-//!   one point (a camera's, at a view's apex) run along the depth axis, where
-//!   the span is the tile's whole range: they skip nothing, so the ranges are
-//!   not computed for them.
+//!   rays, every kind in one batch: about half of the tests). That changes
+//!   no hit: where the plain stage finds the closest hit, in the tile that
+//!   holds the hit point, the point's depth lies in the ray's span there
+//!   (the span the buckets are chosen by) and in the triangle's range (the
+//!   fragments' depths are clipped from the same vertices; the margin covers
+//!   both roundings), so the triangle is tested there; a triangle left out
+//!   is not entered in the mailbox; and until the closest hit is found, the
+//!   walk's termination tests compare with a `t` no smaller than its own, so
+//!   they do not stop it earlier. Testing fewer candidates that still hold
+//!   the closest gives the same closest. Rays from one point (a camera's, at
+//!   a view's apex) run along the depth axis, where the span is the tile's
+//!   whole range: they skip nothing, so the ranges are not computed for them.
 //! - A bucket's triangles are tested [`LANES`] at a time
 //!   ([`intersect_closest_lanes`]: the edge functions of several triangles
 //!   side by side, each lane the scalar test's bits); the closest hit of a
@@ -170,10 +170,7 @@ impl<'a> Scene<'a> {
     /// pairs. Only the trace without statistics reads them.
     pub(crate) fn cull_by_depth(&mut self, rays: &[Ray]) {
         let pairs = self.tris.len().saturating_mul(self.ads.views.slots());
-        let from_one_point = rays.first().is_none_or(|first| {
-            let bits = first.origin.map(f32::to_bits);
-            rays.iter().all(|r| r.origin.map(f32::to_bits) == bits)
-        });
+        let from_one_point = crate::cost::common_origin(rays).is_some();
         if !from_one_point && rays.len().saturating_mul(PAIRS_PER_RAY) >= pairs {
             self.depths = triangle_depths(&self.ads.views, self.tris);
         }
@@ -210,11 +207,9 @@ const PAIRS_PER_RAY: usize = 4;
 pub(crate) fn triangle_depths(set: &ViewSet, tris: &[Triangle]) -> Vec<[f32; 2]> {
     use rayon::prelude::*;
     let n = tris.len();
-    let views = &set.views;
-    let slots = views.iter().filter(|v| v.has_content).count();
-    let mut out = vec![[f32::NEG_INFINITY, f32::INFINITY]; slots * n];
+    let mut out = vec![[f32::NEG_INFINITY, f32::INFINITY]; set.slots() * n];
     let partial = set.kind == ViewsKind::Single;
-    for v in views.iter().filter(|v| v.has_content) {
+    for v in set.views.iter().filter(|v| v.has_content) {
         let planes = view_frustum(v);
         let at = v.slot as usize * n;
         let Some(slice) = out.get_mut(at..at + n) else {
