@@ -11,7 +11,19 @@ use dirt_math::{Aabb, Triangle, Vec3, View, ViewSet, ViewsKind};
 /// Views that no triangle reaches (see [`views_reached`]) are left out: they
 /// get no build passes and no memory, and rays skip them. That changes no hit.
 pub fn views_for(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CoreError> {
-    let mut views = views_for_all(tris, params)?;
+    views_for_bounded(tris, params, None)
+}
+
+/// [`views_for`], given the scene bounds where the caller has them already
+/// (`bounds` must be [`bounds_of`]`(tris)`: a builder that read them to
+/// decide where its views go does not pay for a second pass over every
+/// vertex, a fortieth of a deforming grid's frame).
+pub fn views_for_bounded(
+    tris: &[Triangle],
+    params: &AdsParams,
+    bounds: Option<Aabb>,
+) -> Result<ViewSet, CoreError> {
+    let mut views = views_for_all_bounded(tris, params, bounds)?;
     let keep = views_reached(&views, tris);
     views.leave_out(&keep);
     Ok(views)
@@ -157,11 +169,30 @@ pub fn first_non_finite(tris: &[Triangle]) -> Option<usize> {
 /// view whose frustum meets the scene bounds is built (the papers'
 /// configuration; the baseline that leaving out is measured against).
 pub fn views_for_all(tris: &[Triangle], params: &AdsParams) -> Result<ViewSet, CoreError> {
+    views_for_all_bounded(tris, params, None)
+}
+
+/// [`views_for_all`] with the bounds of [`views_for_bounded`].
+fn views_for_all_bounded(
+    tris: &[Triangle],
+    params: &AdsParams,
+    bounds: Option<Aabb>,
+) -> Result<ViewSet, CoreError> {
     params.validate()?;
     if let Some(index) = first_non_finite(tris) {
         return Err(CoreError::NonFiniteTriangle { index });
     }
-    let mut bounds = bounds_of(tris);
+    let bits = |b: &Aabb| {
+        (
+            b.min.to_array().map(f32::to_bits),
+            b.max.to_array().map(f32::to_bits),
+        )
+    };
+    debug_assert!(
+        bounds.is_none_or(|b| bits(&b) == bits(&bounds_of(tris))),
+        "views_for_bounded: bounds that are not the triangles' own"
+    );
+    let mut bounds = bounds.unwrap_or_else(|| bounds_of(tris));
     if bounds.is_empty() {
         bounds = Aabb {
             min: Vec3::splat(-1.0),
@@ -220,6 +251,46 @@ mod tests {
                 "{n}"
             );
         }
+    }
+
+    /// Bounds handed in place the views exactly where the views' own
+    /// reading of the bounds does, for every kind of view set.
+    #[test]
+    fn views_given_the_bounds_are_the_views_found_without_them() {
+        let tris: Vec<Triangle> = (0..ON_CALLER + 9)
+            .map(|k| {
+                let f = k as f32;
+                speck(Vec3::new(
+                    (f * 0.37).sin() * 3.0,
+                    (f * 0.11).cos(),
+                    (f * 0.05).sin() - 0.5,
+                ))
+            })
+            .collect();
+        for views in [
+            ViewsKind::Cube,
+            ViewsKind::Single,
+            ViewsKind::Ortho,
+            ViewsKind::OrthoSplit,
+        ] {
+            let params = AdsParams {
+                views,
+                ..AdsParams::default()
+            };
+            let given = views_for_bounded(&tris, &params, Some(bounds_of(&tris))).expect("views");
+            let found = views_for(&tris, &params).expect("views");
+            assert_eq!(given, found, "{views:?}");
+        }
+    }
+
+    /// Bounds of other triangles are a caller's error, caught where
+    /// assertions are on (they would place the views wrongly).
+    #[cfg(debug_assertions)]
+    #[test]
+    #[should_panic(expected = "not the triangles' own")]
+    fn views_given_other_bounds_are_refused() {
+        let tris = [speck(Vec3::ZERO), speck(Vec3::ONE)];
+        let _ = views_for_bounded(&tris, &AdsParams::default(), Some(bounds_of(&tris[..1])));
     }
 
     /// Which views a triangle past the first `ON_CALLER` reaches is found

@@ -38,7 +38,10 @@ pub use cache::{BuildCache, Geometry, Reuse};
 pub use trace::{trace, trace_into, trace_with_stats};
 pub use tracer::DirtCpu;
 
-use dirt_core::{AdsParams, BuildTimings, CoreError, IdLists, Triangle, views_for, views_for_all};
+use dirt_core::{
+    AdsParams, BuildTimings, CoreError, IdLists, Triangle, views_for_all, views_for_bounded,
+};
+use dirt_math::Aabb;
 use dirt_math::ViewSet;
 use dirt_math::dda::hiz_width;
 use dirt_math::encode::ordered_to_f32;
@@ -91,9 +94,19 @@ fn in_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
 
 impl Ads {
     /// Builds the structure: `fill_depth`, `mip_depth`, `fill_primitives`,
-    /// over the views of [`views_for`] (views no triangle reaches left out).
+    /// over the views of [`views_for`](dirt_core::views_for) (views no
+    /// triangle reaches left out).
     pub fn build(tris: &[Triangle], params: &AdsParams) -> Result<Ads, CpuError> {
-        in_pool(|| Self::build_over(views_for(tris, params)?, tris, params))
+        Self::build_bounded(tris, params, None)
+    }
+
+    /// [`Ads::build`] with the bounds of [`dirt_core::views_for_bounded`].
+    pub(crate) fn build_bounded(
+        tris: &[Triangle],
+        params: &AdsParams,
+        bounds: Option<Aabb>,
+    ) -> Result<Ads, CpuError> {
+        in_pool(|| Self::build_over(views_for_bounded(tris, params, bounds)?, tris, params))
     }
 
     /// [`Ads::build`] over every view of [`views_for_all`]: nothing left out.

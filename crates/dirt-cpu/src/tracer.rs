@@ -7,8 +7,8 @@ use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
     Triangle, ViewsKind, check_lengths,
 };
-use dirt_math::Vec3;
 use dirt_math::view::single_sees_all;
+use dirt_math::{Aabb, Vec3};
 use web_time::Instant;
 
 /// Rays in the sample [`DirtCpu::auto`] measures candidates with.
@@ -223,8 +223,10 @@ impl DirtCpu {
             }
             self.origin = seen.origin;
         }
-        // Only a choice at an origin reads the bounds.
-        let bounds = || dirt_core::bounds_of(tris);
+        // Only a choice at an origin reads the bounds; read once, they also
+        // place the views of the build.
+        let mut known: Option<Aabb> = None;
+        let mut bounds = || *known.get_or_insert_with(|| dirt_core::bounds_of(tris));
         // (A centre of the split orthographic views is their cut, not an origin.)
         if self.auto.is_some() && self.params.center.is_some() && !self.params.views.is_ortho() {
             // A choice placed at the origin moves with it; a single view must
@@ -275,7 +277,7 @@ impl DirtCpu {
             let (ads, built_stages) = match built {
                 Some(ads) => (ads, Vec::new()),
                 None => {
-                    let ads = Ads::build(tris, &self.params)?;
+                    let ads = Ads::build_bounded(tris, &self.params, known)?;
                     let built_stages = ads.timings.stages();
                     (ads, built_stages)
                 }
@@ -297,7 +299,7 @@ impl DirtCpu {
             stages.extend(built_stages);
             return Ok(self.keep(ads, tris, stages));
         }
-        let ads = Ads::build(tris, &self.params)?;
+        let ads = Ads::build_bounded(tris, &self.params, known)?;
         stages.extend(ads.timings.stages());
         Ok(self.keep(ads, tris, stages))
     }
