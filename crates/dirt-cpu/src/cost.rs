@@ -287,9 +287,9 @@ impl Candidate {
     }
 }
 
-/// The candidates the model ranks: face resolution {8, 16, …, 256} × B {4, 8, 16}
-/// (S = 1; a tile of S pixels is the same structure as resolution / S), with
-/// the views and centre of `base`; with `both_views` and no centre, for the
+/// The candidates the model ranks: face resolution {8, 16, …, 256} × B {1, 2,
+/// 4, 8, 16} (S = 1; a tile of S pixels is the same structure as resolution /
+/// S), with the views and centre of `base`; with `both_views` and no centre, for the
 /// cube and for the single view too (placed outside the bounds, the single
 /// view sees the whole scene, so it is exact for every ray as the cube is).
 pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
@@ -301,7 +301,7 @@ pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
     let mut out = Vec::new();
     for views in views {
         for resolution in [8, 16, 32, 64, 128, 256] {
-            for buckets in [4, 8, 16] {
+            for buckets in [1, 2, 4, 8, 16] {
                 out.push(AdsParams {
                     views,
                     resolution,
@@ -599,11 +599,14 @@ pub struct AutoChoice {
 pub const AUTO_BUDGET: f64 = 0.25;
 
 /// [`AUTO_BUDGET`] of a choice that is kept for later frames and traces
-/// ([`auto_budgeted`], as `DirtCpu::auto` chooses): two frames' worth. On
-/// the deforming grid at the camera (32k triangles) the quarter frame built only the first guess, single
-/// r128 B8; this budget walks on to r128 B4, a frame of 5,000 rays 4.12 ->
-/// 3.80 ms and of 100,000 rays 19.0 -> 16.9 ms, for a few builds once.
-pub const KEPT_BUDGET: f64 = 2.0;
+/// ([`auto_budgeted`], as `DirtCpu::auto` chooses): four frames' worth. On
+/// the deforming grid at the camera (32k triangles) the quarter frame built
+/// only the first guess, single r128 B8. Two frames walked on to r128 B4 (a
+/// frame of 5,000 rays 4.12 -> 3.80 ms, of 100,000 rays 19.0 -> 16.9 ms);
+/// with B 1 and 2 among the candidates they reach r256 B1 for 100,000 rays
+/// (17.1 -> 14.6 ms), and four frames reach r128 B2 for 5,000 (3.46-3.52 ->
+/// 3.39-3.42 ms), for a few builds once.
+pub const KEPT_BUDGET: f64 = 4.0;
 
 /// The first resolution [`auto`] tries for a view kind: the power of two
 /// nearest `sqrt(triangles / views)`, so that a triangle covers about one
@@ -906,7 +909,7 @@ mod tests {
         assert!(all.iter().any(|p| p.views == ViewsKind::Ortho));
         assert_eq!(
             candidates_all(&AdsParams::default(), &tris).len(),
-            all.len() - 2 * 18
+            all.len() - 2 * 30
         );
         assert!(all.iter().all(|p| p.validate().is_ok()));
         let placed = AdsParams {
@@ -1032,7 +1035,7 @@ mod tests {
             &candidates(&AdsParams::default(), true),
         )
         .expect("choose");
-        assert_eq!(ranked.len(), 36);
+        assert_eq!(ranked.len(), 60);
         assert!(ranked.windows(2).all(|w| w[0].frame_ms <= w[1].frame_ms));
         // Counts are exact: more buckets never put fewer nodes in the lists.
         let nodes = |r: u32, b: u32| {
