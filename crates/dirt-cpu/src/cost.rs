@@ -287,11 +287,12 @@ impl Candidate {
     }
 }
 
-/// The candidates the model ranks: face resolution {8, 16, …, 256} × B {1, 2,
-/// 4, 8, 16} (S = 1; a tile of S pixels is the same structure as resolution /
-/// S), with the views and centre of `base`; with `both_views` and no centre, for the
-/// cube and for the single view too (placed outside the bounds, the single
-/// view sees the whole scene, so it is exact for every ray as the cube is).
+/// The candidates the model ranks: face resolution {8, 16, …, 256} ×
+/// B {1, 2, 4, 8, 16} (S = 1; a tile of S pixels is the same structure as
+/// resolution / S), with the views and centre of `base`; with `both_views`
+/// and no centre, for the cube and for the single view too (placed outside
+/// the bounds, the single view sees the whole scene, so it is exact for
+/// every ray as the cube is).
 pub fn candidates(base: &AdsParams, both_views: bool) -> Vec<AdsParams> {
     let views = if both_views && base.center.is_none() {
         vec![ViewsKind::Cube, ViewsKind::Single]
