@@ -92,13 +92,8 @@ pub fn trace_into(
                     }
                 }
                 None => {
-                    let out: Vec<Hit> = sorted
-                        .par_iter()
-                        .with_max_len(RAYS_PER_TASK)
-                        .map_init(Scratch::new, |scratch, r| {
-                            trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
-                        })
-                        .collect();
+                    let mut out = vec![Hit::MISS; sorted.len()];
+                    trace_chunks(&sc, &sorted, &mut out, traversal);
                     for (o, h) in order.iter().zip(out) {
                         hits[index(o)] = h;
                     }
@@ -115,15 +110,26 @@ pub fn trace_into(
                 .for_each_init(Scratch::new, |scratch, ((r, h), s)| {
                     (*h, *s) = trace_fast::trace_ray::<true>(&sc, scratch, r, traversal)
                 }),
-            None => rays
-                .par_iter()
-                .zip(hits.par_iter_mut())
-                .with_max_len(RAYS_PER_TASK)
-                .for_each_init(Scratch::new, |scratch, (r, h)| {
-                    *h = trace_fast::trace_ray::<false>(&sc, scratch, r, traversal).0
-                }),
+            None => trace_chunks(&sc, rays, hits, traversal),
         }
     })
+}
+
+/// Rays a parallel item of [`trace_chunks`] takes.
+const CHUNK: usize = 32;
+
+/// The hits of `rays` into `hits` (as long), without statistics. The
+/// parallel items are chunks of [`CHUNK`] rays, each traced in a plain loop:
+/// an item a ray cost a call through the loop's closure for each.
+fn trace_chunks(sc: &Scene<'_>, rays: &[Ray], hits: &mut [Hit], traversal: Traversal) {
+    rays.par_chunks(CHUNK)
+        .zip(hits.par_chunks_mut(CHUNK))
+        .with_max_len(RAYS_PER_TASK / CHUNK)
+        .for_each_init(Scratch::new, |scratch, (rays, hits)| {
+            for (r, h) in rays.iter().zip(hits) {
+                *h = trace_fast::trace_ray::<false>(sc, scratch, r, traversal).0;
+            }
+        });
 }
 
 fn plain_into(
