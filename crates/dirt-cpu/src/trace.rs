@@ -68,7 +68,7 @@ pub fn trace_into(
             return plain_into(ads, tris, rays, traversal, hits, stats);
         };
         if stats.is_none() {
-            sc.cull_by_depth(rays);
+            sc.prepare_for(rays);
         }
         // Large batches run in a coherent order (nearby rays share cells, lists
         // and triangles in cache); the results land in input order.

@@ -168,8 +168,9 @@ fn large_batches_in_coherent_order_are_the_plain_stage() {
 // them for primary rays): most of them miss the sparse scene, and the linear
 // walk of such a ray is left out when no cell near it holds anything at its
 // depths; in a single view, such a ray is found to miss from its direction
-// alone when every tile near its own is empty, before its set-up. The hits
-// must stay the plain stage's, on small and large grids.
+// alone when every tile near its own is empty, before its set-up (read from
+// a bit a tile on the small grids, from the Hi-Z pyramid on the large). The
+// hits must stay the plain stage's, on small and large grids.
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
