@@ -67,12 +67,16 @@ pub fn trace_into(
             // A view set or pyramid larger than the fast path's arrays.
             return plain_into(ads, tris, rays, traversal, hits, stats);
         };
+        // Read once: what pays for the rays and their order both depend on it.
+        let origin = crate::cost::common_origin(rays);
         if stats.is_none() {
-            sc.prepare_for(rays);
+            sc.prepare_for(rays, origin);
         }
         // Large batches run in a coherent order (nearby rays share cells, lists
-        // and triangles in cache); the results land in input order.
-        if let Some(order) = trace_fast::coherent_order(rays) {
+        // and triangles in cache); the results land in input order. Rays that
+        // all start at one point keep theirs (`coherent_order`).
+        let order = origin.is_none().then(|| trace_fast::coherent_order(rays));
+        if let Some(order) = order.flatten() {
             let index = |o: &u64| (o & 0xffff_ffff) as usize;
             // Gathered first: a loop of loads only overlaps the cache misses of
             // reading rays out of order, which the walk would wait on one by one.

@@ -205,9 +205,9 @@ impl<'a> Scene<'a> {
     /// For rays that all start at the apex of a single view ([`Apex`]),
     /// numbering at least one for every [`TILES_PER_RAY`] tiles, it marks
     /// the view's tiles with content instead ([`Apex::mark`]).
-    pub(crate) fn prepare_for(&mut self, rays: &[Ray]) {
+    /// `origin` is the rays' [`common_origin`](crate::cost::common_origin).
+    pub(crate) fn prepare_for(&mut self, rays: &[Ray], origin: Option<dirt_math::Vec3>) {
         let pairs = self.tris.len().saturating_mul(self.ads.views.slots());
-        let origin = crate::cost::common_origin(rays);
         if origin.is_none() && rays.len().saturating_mul(PAIRS_PER_RAY) >= pairs {
             self.depths = triangle_depths(&self.ads.views, self.tris);
         }
@@ -1476,9 +1476,10 @@ mod tests {
     }
 
     /// The depth ranges are computed for rays from several points when there
-    /// are enough of them, not for rays from one point; in a single view that
-    /// does not see the whole scene, a triangle it does not hold gets the
-    /// whole line, and one it holds its vertices' range.
+    /// are enough of them, not for rays from one point (from a single view's
+    /// apex, its tiles' content bits are, when there are enough); in a single
+    /// view that does not see the whole scene, a triangle it does not hold
+    /// gets the whole line, and one it holds its vertices' range.
     #[test]
     fn depth_ranges_are_computed_where_they_pay_and_span_what_a_view_misses() {
         let tris = dirt_scene::builtin("cornell").expect("built-in").triangles;
@@ -1492,14 +1493,27 @@ mod tests {
         let ads = Ads::build(&tris, &single).expect("build");
         let pairs = tris.len() * ads.views.slots();
         let mut sc = Scene::new(&ads, &tris).expect("fast path");
+        let prepare = |sc: &mut Scene, rays: &[Ray]| {
+            sc.prepare_for(rays, crate::cost::common_origin(rays));
+        };
         let one_point = vec![ray(eye); pairs];
-        sc.prepare_for(&one_point);
+        prepare(&mut sc, &one_point);
         assert!(sc.depths.is_empty(), "rays from one point");
+        // From the single view's apex: its tiles' content bits, when they pay.
+        let tiles = ads.views.views[0].tile_count();
+        let marked = |sc: &Scene| sc.apex.as_ref().is_some_and(|a| !a.content.is_empty());
+        assert_eq!(marked(&sc), pairs * TILES_PER_RAY >= tiles);
+        let mut sc = Scene::new(&ads, &tris).expect("fast path");
+        prepare(&mut sc, &vec![ray(eye); tiles.div_ceil(TILES_PER_RAY)]);
+        assert!(marked(&sc), "enough rays from the apex");
+        let mut sc = Scene::new(&ads, &tris).expect("fast path");
+        prepare(&mut sc, &vec![ray(eye); tiles / TILES_PER_RAY - 1]);
+        assert!(!marked(&sc), "too few rays from the apex");
         let mut two_points = one_point.clone();
         two_points[0] = ray(Vec3::ZERO);
-        sc.prepare_for(&two_points[..pairs / PAIRS_PER_RAY - 1]);
+        prepare(&mut sc, &two_points[..pairs / PAIRS_PER_RAY - 1]);
         assert!(sc.depths.is_empty(), "too few rays");
-        sc.prepare_for(&two_points[..pairs / PAIRS_PER_RAY + 1]);
+        prepare(&mut sc, &two_points[..pairs / PAIRS_PER_RAY + 1]);
         assert_eq!(sc.depths.len(), pairs);
         // A view from inside the box sees part of it: some triangles get the whole line.
         let v = &ads.views.views[0];
