@@ -750,8 +750,9 @@ impl Apex {
         self.content = content;
     }
 
-    /// Whether `ray`, a valid ray, starts at the apex and every tile its
-    /// walk could reach is empty, so that it hits nothing. Its view-space
+    /// For `ray`, a valid ray that starts at the apex and points ahead,
+    /// whether every tile its walk could reach is empty, so that it hits
+    /// nothing; `None` for any other ray. Its view-space
     /// origin is then zero, and its tile coordinate at any `t` is
     /// `((t·d₀) / (t·d₂) + tan) / step`: `(d₀ / d₂ + tan) / step` up to a
     /// few ulps. The walk reaches tiles within its dilation of that
@@ -759,17 +760,19 @@ impl Apex {
     /// or more there, the ray having entered the dilated near plane), so within
     /// [`Apex::margin`] of the direction's coordinate; and an empty tile
     /// (or cell) has bounds that no depth meets. A ray that does not start
-    /// at the apex, or does not point ahead, is left to its walk.
+    /// at the apex, or does not point ahead, is left to its walk; so is one
+    /// with content near, and there [`RayState::meets_nothing`] is not
+    /// tried, as its depth span runs from the near plane on.
     #[inline]
-    fn sees_nothing(&self, sc: &Scene<'_>, ray: &Ray) -> bool {
+    fn sees_nothing(&self, sc: &Scene<'_>, ray: &Ray) -> Option<bool> {
         if ray.origin.map(f32::to_bits) != self.at {
-            return false;
+            return None;
         }
         let d = ray.dir;
         let dot = |a: &[f32; 3]| d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
         let dz = dot(&self.axes[2]);
         if !(dz > 0.0) {
-            return false;
+            return None;
         }
         // One division: the margin covers a few more roundings.
         let r = 1.0 / dz;
@@ -780,7 +783,7 @@ impl Apex {
         let tiles = self.tiles as f32;
         if !(x + m >= 0.0 && y + m >= 0.0 && x - m < tiles && y - m < tiles) {
             // Beside the view (or not finite: left to the walk).
-            return x.is_finite() && y.is_finite();
+            return (x.is_finite() && y.is_finite()).then_some(true);
         }
         let last = self.tiles - 1;
         let r = Reach {
@@ -790,18 +793,18 @@ impl Apex {
             depth: (f32::MIN, f32::MAX),
         };
         if self.content.is_empty() {
-            return sc.nothing_in(&sc.views[0], &r);
+            return Some(sc.nothing_in(&sc.views[0], &r));
         }
         let words = self.row_words();
         for j in r.j.0..=r.j.1 {
             let row = &self.content[j as usize * words..];
             for i in r.i.0..=r.i.1 {
                 if row[i as usize / 64] >> (i % 64) & 1 != 0 {
-                    return false;
+                    return Some(false);
                 }
             }
         }
-        true
+        Some(true)
     }
 }
 
@@ -939,6 +942,8 @@ struct RayState<'s, 'a, const STATS: bool> {
     sh: RayShear,
     best: Hit,
     stats: RayStats,
+    /// [`Apex::sees_nothing`] found content near the ray.
+    looked: bool,
 }
 
 /// One ray, the same hit and statistics as [`crate::trace::trace_ray_plain`].
@@ -952,11 +957,15 @@ pub(crate) fn trace_ray<const STATS: bool>(
     if ray.validate().is_err() {
         return (Hit::MISS, RayStats::default());
     }
-    if !STATS
-        && let Some(apex) = &sc.apex
-        && apex.sees_nothing(sc, ray)
-    {
-        return (Hit::MISS, RayStats::default());
+    // Whether the ray is one from the apex with content near: then its short
+    // walk is not tried for meeting nothing, which it would not.
+    let mut looked = false;
+    if !STATS && let Some(apex) = &sc.apex {
+        match apex.sees_nothing(sc, ray) {
+            Some(true) => return (Hit::MISS, RayStats::default()),
+            Some(false) => looked = true,
+            None => {}
+        }
     }
     let n = sc.views.len();
     let (vrs, ivs, exits) = sc.lanes.enter(ray);
@@ -970,6 +979,7 @@ pub(crate) fn trace_ray<const STATS: bool>(
         sh: RayShear::new(ray),
         best: Hit::MISS,
         stats: RayStats::default(),
+        looked,
     };
     let mut visited = 0u32;
     // The unvisited view the ray enters first (the first such on ties).
@@ -1034,6 +1044,7 @@ impl<const STATS: bool> RayState<'_, '_, STATS> {
         // Tried on short walks only: a long one nearly always meets a cell
         // with something in it, and then the test is time lost.
         if !STATS
+            && !self.looked
             && k1 - k0 < SHORT_WALK
             && reach(v, vr, iv, [ax, ay, bx, by], delta).is_some_and(|r| self.meets_nothing(v, &r))
         {
