@@ -752,17 +752,17 @@ impl Apex {
 
     /// For `ray`, a valid ray that starts at the apex and points ahead,
     /// whether every tile its walk could reach is empty, so that it hits
-    /// nothing; `None` for any other ray. Its view-space
-    /// origin is then zero, and its tile coordinate at any `t` is
-    /// `((t·d₀) / (t·d₂) + tan) / step`: `(d₀ / d₂ + tan) / step` up to a
-    /// few ulps. The walk reaches tiles within its dilation of that
-    /// coordinate at the ray's ends ([`reach`]; its depth is `near − eps`
-    /// or more there, the ray having entered the dilated near plane), so within
-    /// [`Apex::margin`] of the direction's coordinate; and an empty tile
-    /// (or cell) has bounds that no depth meets. A ray that does not start
-    /// at the apex, or does not point ahead, is left to its walk; so is one
-    /// with content near, and there [`RayState::meets_nothing`] is not
-    /// tried, as its depth span runs from the near plane on.
+    /// nothing; `None` for any other ray, which is left to its walk.
+    ///
+    /// Such a ray's view-space origin is zero, and its tile coordinate at
+    /// any `t` is `((t·d₀) / (t·d₂) + tan) / step`: `(d₀ / d₂ + tan) / step`
+    /// up to a few ulps. The walk reaches tiles within its dilation of that
+    /// coordinate at the ray's ends ([`reach`]; its depth there is
+    /// `near − eps` or more, the ray having entered the dilated near
+    /// plane), so within [`Apex::margin`] of the direction's coordinate;
+    /// and an empty tile (or cell) has bounds that no depth meets. A ray
+    /// with content near walks without trying [`RayState::meets_nothing`],
+    /// as its depth span runs from the near plane on.
     #[inline]
     fn sees_nothing(&self, sc: &Scene<'_>, ray: &Ray) -> Option<bool> {
         if ray.origin.map(f32::to_bits) != self.at {
