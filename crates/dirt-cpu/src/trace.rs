@@ -75,8 +75,12 @@ pub fn trace_into(
         // Large batches run in a coherent order (nearby rays share cells, lists
         // and triangles in cache); the results land in input order. Rays that
         // all start at one point keep theirs (`coherent_order`).
-        let order = origin.is_none().then(|| trace_fast::coherent_order(rays));
-        if let Some(order) = order.flatten() {
+        let order = if origin.is_none() {
+            trace_fast::coherent_order(rays)
+        } else {
+            None
+        };
+        if let Some(order) = order {
             let index = |o: &u64| (o & 0xffff_ffff) as usize;
             // Gathered first: a loop of loads only overlaps the cache misses of
             // reading rays out of order, which the walk would wait on one by one.

@@ -143,7 +143,7 @@ pub(crate) struct Scene<'a> {
     /// else empty.
     depths: Vec<[f32; 2]>,
     /// A single perspective view's apex check ([`Apex`]).
-    apex: Option<Apex>,
+    apex: Option<Apex<'a>>,
 }
 
 impl<'a> Scene<'a> {
@@ -684,11 +684,11 @@ fn reach(
 /// rays, with the view placed at the camera): such a ray's tile coordinate
 /// does not move along it, so where it looks is known from its direction
 /// alone, before its set-up ([`ViewLanes::enter`]) and walk.
-struct Apex {
+struct Apex<'a> {
+    /// The view.
+    view: &'a View,
     /// The apex's bits: a ray starts there when its origin has them.
     at: [u32; 3],
-    /// The view's right, up and forward axes.
-    axes: [[f32; 3]; 3],
     tan: f32,
     /// `1 / step`.
     per_step: f32,
@@ -701,28 +701,28 @@ struct Apex {
     content: Vec<u64>,
 }
 
-impl Apex {
+impl<'a> Apex<'a> {
     /// For a set of one perspective view with content.
-    fn of(views: &[View]) -> Option<Apex> {
+    fn of(views: &'a [View]) -> Option<Apex<'a>> {
         let [v] = views else { return None };
         if v.ortho || !v.has_content || v.tiles == 0 {
             return None;
         }
-        // A walk's dilation (`dilation`): the ray's `eps` (View::ray, its
-        // origin at the apex) over its smallest depth less `eps`, plus
+        // A walk's dilation (`dilation`): the ray's `eps` (that of every
+        // ray from the apex) over its smallest depth less `eps`, plus
         // 1/256. The ray enters the near plane dilated by `eps`, so that
         // depth is `near − 2·eps` up to its rounding (a 1/1024 share of it
         // covers that); 1/64 of a tile more covers the rounding of the
         // coordinate along the ray.
-        let eps = EPS_RAY_REL * (0.0 + 2.0 * v.scale);
+        let eps = v.ray(&Ray::new(v.apex, v.forward, 0.0, f32::INFINITY)).eps;
         if !(eps < v.near * 0.25 && v.near >= f32::MIN_POSITIVE * 16_777_216.0) {
             return None;
         }
         let w = (v.near - 2.0 * eps) * (1.0 - 1.0 / 1024.0);
         let margin = eps / w / v.step + 1.0 / 256.0 + 1.0 / 64.0;
         margin.is_finite().then(|| Apex {
+            view: v,
             at: v.apex.to_array().map(f32::to_bits),
-            axes: [v.right, v.up, v.forward].map(|a| a.to_array()),
             tan: v.tan,
             per_step: 1.0 / v.step,
             tiles: v.tiles,
@@ -768,16 +768,14 @@ impl Apex {
         if ray.origin.map(f32::to_bits) != self.at {
             return None;
         }
-        let d = ray.dir;
-        let dot = |a: &[f32; 3]| d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
-        let dz = dot(&self.axes[2]);
+        let [dx, dy, dz] = self.view.dir_to_view(ray.dir());
         if !(dz > 0.0) {
             return None;
         }
         // One division: the margin covers a few more roundings.
         let r = 1.0 / dz;
-        let x = (dot(&self.axes[0]) * r + self.tan) * self.per_step;
-        let y = (dot(&self.axes[1]) * r + self.tan) * self.per_step;
+        let x = (dx * r + self.tan) * self.per_step;
+        let y = (dy * r + self.tan) * self.per_step;
         // Wider for a coordinate so large that its ulps approach a tile.
         let m = self.margin + fmax(x.abs(), y.abs()) * (1.0 / 65536.0);
         let tiles = self.tiles as f32;
@@ -793,7 +791,7 @@ impl Apex {
             depth: (f32::MIN, f32::MAX),
         };
         if self.content.is_empty() {
-            return Some(sc.nothing_in(&sc.views[0], &r));
+            return Some(sc.nothing_in(self.view, &r));
         }
         let words = self.row_words();
         for j in r.j.0..=r.j.1 {
@@ -958,7 +956,8 @@ pub(crate) fn trace_ray<const STATS: bool>(
         return (Hit::MISS, RayStats::default());
     }
     // Whether the ray is one from the apex with content near: then its short
-    // walk is not tried for meeting nothing, which it would not.
+    // walk is not tried for meeting nothing, which only a range ending
+    // before that content would.
     let mut looked = false;
     if !STATS && let Some(apex) = &sc.apex {
         match apex.sees_nothing(sc, ray) {
