@@ -52,6 +52,16 @@
 //!   For a batch of such rays with a ray per [`TILES_PER_RAY`] tiles, the
 //!   tiles' emptiness is read from a bit a tile made once per call, not
 //!   from the pyramid.
+//! - Without statistics, a ray's interval in a view is cut to where its
+//!   depth lies within the depth bounds of the view's whole content (its
+//!   Hi-Z root cell) widened by twice the ray's `eps` ([`Scene::to_content`]):
+//!   no hit lies outside them. The walk then starts where content can
+//!   begin, and its dilation, set by the smallest depth of its interval, is
+//!   that of the content's front, not of the near plane. A camera's ray from
+//!   a single view placed at its eye entered 2.8 tiles on the deforming grid
+//!   (the near plane at 0.71, the grid from about 2); its hits went from
+//!   436 to 394 ns (1 thread, best of five alternated runs), and the apex
+//!   check's margin ([`Apex::of`]) shrinks with it.
 //! - Without statistics, the Hi-Z walk starts at the (at most 2 × 2) cells
 //!   of the lowest level that hold every tile the ray can reach ([`reach`]),
 //!   not at the root. A cell's interval and depth test do not depend on its
@@ -144,6 +154,9 @@ pub(crate) struct Scene<'a> {
     depths: Vec<[f32; 2]>,
     /// A single perspective view's apex check ([`Apex`]).
     apex: Option<Apex<'a>>,
+    /// Per view, the depth bounds of all its content (its Hi-Z root cell),
+    /// decoded: `[+inf, -inf]` where it has none ([`Scene::to_content`]).
+    content: [[f32; 2]; MAX_VIEWS],
 }
 
 impl<'a> Scene<'a> {
@@ -163,7 +176,18 @@ impl<'a> Scene<'a> {
             .iter()
             .map(|v| (0..=v.tiles).map(|k| v.boundary(k)).collect())
             .collect();
+        let top = levels - 1;
+        let root = widths[top] as usize * widths[top] as usize;
+        let content = from_fn(|f| match views.get(f) {
+            Some(v) if v.has_content => ads.hiz[top]
+                .get(v.slot as usize * root)
+                .map_or([f32::INFINITY, f32::NEG_INFINITY], |z| {
+                    z.map(ordered_to_f32)
+                }),
+            _ => [f32::INFINITY, f32::NEG_INFINITY],
+        });
         Some(Scene {
+            content,
             ads,
             tris,
             views,
@@ -173,7 +197,7 @@ impl<'a> Scene<'a> {
             slopes,
             lanes: ViewLanes::new(views),
             depths: Vec::new(),
-            apex: Apex::of(views),
+            apex: Apex::of(views, content[0][0]),
         })
     }
 
@@ -225,6 +249,37 @@ impl<'a> Scene<'a> {
         let n = self.tris.len();
         let at = v.slot as usize * n;
         self.depths.get(at..at + n)
+    }
+
+    /// `iv` cut to where the ray's depth in view `f` lies within its
+    /// content's depth bounds widened by twice the ray's `eps`: empty for a
+    /// view without content.
+    ///
+    /// Why no hit is lost: the closest hit lies in a tile of some view the
+    /// ray walks, inside the depth extent of its triangle's fragment there,
+    /// which lies within the tile's bounds and so within the root's. The
+    /// ray's depth at the hit's `t` differs from the hit point's by less
+    /// than one `eps` (what the tiles' depth tests allow for already), and
+    /// the cut's rounding (`(z − o)/d`, a few ulps of `|z| + |o|`, both at
+    /// most the scale `eps` is 2⁻¹² of) takes far less than the second.
+    /// The walk then starts where content can begin: its dilation, set by
+    /// the smallest depth of its interval, is no longer that of the near
+    /// plane (a camera's ray from a view placed at its eye entered 2.8
+    /// tiles on the deforming grid where its direction lies in one).
+    #[inline]
+    fn to_content(&self, f: usize, vr: &ViewRay, iv: &mut Interval) {
+        let [zmin, zmax] = self.content[f];
+        let (lo, hi) = (zmin - 2.0 * vr.eps, zmax + 2.0 * vr.eps);
+        let (o, d) = (vr.o[2], vr.d[2]);
+        if d > 0.0 {
+            iv.t0 = fmax(iv.t0, (lo - o) / d);
+            iv.t1 = fmin(iv.t1, (hi - o) / d);
+        } else if d < 0.0 {
+            iv.t0 = fmax(iv.t0, (hi - o) / d);
+            iv.t1 = fmin(iv.t1, (lo - o) / d);
+        } else if !(o >= lo && o <= hi) {
+            *iv = Interval::EMPTY;
+        }
     }
 }
 
@@ -703,22 +758,24 @@ struct Apex<'a> {
 
 impl<'a> Apex<'a> {
     /// For a set of one perspective view with content.
-    fn of(views: &'a [View]) -> Option<Apex<'a>> {
+    fn of(views: &'a [View], content_near: f32) -> Option<Apex<'a>> {
         let [v] = views else { return None };
         if v.ortho || !v.has_content || v.tiles == 0 {
             return None;
         }
         // A walk's dilation (`dilation`): the ray's `eps` (that of every
         // ray from the apex) over its smallest depth less `eps`, plus
-        // 1/256. The ray enters the near plane dilated by `eps`, so that
-        // depth is `near − 2·eps` up to its rounding (a 1/1024 share of it
-        // covers that); 1/64 of a tile more covers the rounding of the
-        // coordinate along the ray.
+        // 1/256. The ray enters the near plane dilated by `eps`, and its
+        // interval is cut to the content's depth less `2·eps`
+        // ([`Scene::to_content`]), so that depth is the larger of
+        // `near − 2·eps` and `content_near − 3·eps`, up to rounding (a 1/1024
+        // share of it covers that); 1/64 of a tile more covers the rounding
+        // of the coordinate along the ray.
         let eps = v.ray(&Ray::new(v.apex, v.forward, 0.0, f32::INFINITY)).eps;
         if !(eps < v.near * 0.25 && v.near >= f32::MIN_POSITIVE * 16_777_216.0) {
             return None;
         }
-        let w = (v.near - 2.0 * eps) * (1.0 - 1.0 / 1024.0);
+        let w = fmax(v.near - 2.0 * eps, content_near - 3.0 * eps) * (1.0 - 1.0 / 1024.0);
         let margin = eps / w / v.step + 1.0 / 256.0 + 1.0 / 64.0;
         margin.is_finite().then(|| Apex {
             view: v,
@@ -967,7 +1024,14 @@ pub(crate) fn trace_ray<const STATS: bool>(
         }
     }
     let n = sc.views.len();
-    let (vrs, ivs, exits) = sc.lanes.enter(ray);
+    let (vrs, mut ivs, exits) = sc.lanes.enter(ray);
+    if !STATS {
+        for f in 0..n {
+            if !ivs[f].is_empty() {
+                sc.to_content(f, &vrs[f], &mut ivs[f]);
+            }
+        }
+    }
     if !STATS {
         scratch.next_ray();
     }
@@ -1538,6 +1602,96 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn rays_are_cut_to_their_views_content_and_keep_every_point_near_it() {
+        let tris = dirt_scene::builtin("cornell").expect("built-in").triangles;
+        let eye = Vec3::new(0.0, 1.0, 3.0);
+        let mut rng = 0x9e37_79b9_u32;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 17;
+            rng ^= rng << 5;
+            rng as f32 / u32::MAX as f32 * 2.0 - 1.0
+        };
+        let mut cut_near = 0;
+        for views in [ViewsKind::Single, ViewsKind::Cube, ViewsKind::OrthoSplit] {
+            let p = dirt_core::AdsParams {
+                views,
+                center: (views == ViewsKind::Single).then_some(eye),
+                ..dirt_core::AdsParams::default()
+            };
+            let ads = Ads::build(&tris, &p).expect("build");
+            let sc = Scene::new(&ads, &tris).expect("fast path");
+            for k in 0..300 {
+                let o = if k % 2 == 0 {
+                    eye
+                } else {
+                    Vec3::new(next(), 1.0 + next(), next())
+                };
+                let d = Vec3::new(next(), next(), next() - 0.5);
+                let ray = Ray::new(o, d, 0.0, f32::INFINITY);
+                let (vrs, ivs, _) = sc.lanes.enter(&ray);
+                for f in 0..sc.views.len() {
+                    let (vr, iv) = (&vrs[f], ivs[f]);
+                    if iv.is_empty() {
+                        continue;
+                    }
+                    let mut cut = iv;
+                    sc.to_content(f, vr, &mut cut);
+                    let [zmin, zmax] = sc.content[f];
+                    if !(zmin <= zmax) {
+                        assert!(cut.is_empty(), "a view without content");
+                        continue;
+                    }
+                    cut_near += usize::from(cut.t0 > iv.t0);
+                    // Every point of the interval within one eps of the
+                    // content's depth stays (the ends and 64 points between).
+                    let t1 = if iv.t1.is_finite() {
+                        iv.t1
+                    } else {
+                        iv.t0 + 100.0
+                    };
+                    for q in 0..=65 {
+                        let t = fmin(iv.t0 + (t1 - iv.t0) * (q as f32 / 65.0), iv.t1);
+                        let z = ray_depth(vr, t);
+                        if z >= zmin - vr.eps && z <= zmax + vr.eps {
+                            assert!(
+                                cut.t0 <= t && t <= cut.t1,
+                                "{views:?} view {f}: t {t} (depth {z}) left out of {cut:?}"
+                            );
+                        }
+                    }
+                    // What is left lies within three eps of the content.
+                    if !cut.is_empty() {
+                        for t in [cut.t0, cut.t1].into_iter().filter(|t| t.is_finite()) {
+                            let z = ray_depth(vr, t);
+                            assert!(
+                                z >= zmin - 3.0 * vr.eps && z <= zmax + 3.0 * vr.eps,
+                                "{views:?} view {f}: depth {z} of {cut:?} past [{zmin}, {zmax}]"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(cut_near > 100, "rays whose start is cut: {cut_near}");
+        // The apex check's margin follows the content's depth, not the near plane.
+        let single = dirt_core::AdsParams {
+            views: ViewsKind::Single,
+            center: Some(eye),
+            ..dirt_core::AdsParams::default()
+        };
+        let ads = Ads::build(&tris, &single).expect("build");
+        let sc = Scene::new(&ads, &tris).expect("fast path");
+        let v = &ads.views.views[..];
+        let margin = |a: Option<Apex>| a.expect("an apex").margin;
+        assert!(
+            sc.content[0][0] > v[0].near * 2.0,
+            "content well past the near plane"
+        );
+        assert!(margin(Apex::of(v, sc.content[0][0])) < margin(Apex::of(v, 0.0)));
     }
     use dirt_math::clip::clip_ray_to_view;
     use dirt_math::{Aabb, Vec3, ViewSet};
