@@ -814,12 +814,14 @@ impl<'a> Apex<'a> {
     /// Such a ray's view-space origin is zero, and its tile coordinate at
     /// any `t` is `((t·d₀) / (t·d₂) + tan) / step`: `(d₀ / d₂ + tan) / step`
     /// up to a few ulps. The walk reaches tiles within its dilation of that
-    /// coordinate at the ray's ends ([`reach`]; its depth there is
-    /// `near − eps` or more, the ray having entered the dilated near
-    /// plane), so within [`Apex::margin`] of the direction's coordinate;
-    /// and an empty tile (or cell) has bounds that no depth meets. A ray
-    /// with content near walks without trying [`RayState::meets_nothing`],
-    /// as its depth span runs from the near plane on.
+    /// coordinate at the ray's ends ([`reach`]; its depth there is at
+    /// least the larger of `near − eps`, the ray having entered the dilated
+    /// near plane, and the content's front less `2·eps`, where
+    /// [`Scene::to_content`] cut it), so within [`Apex::margin`] of the
+    /// direction's coordinate; and an empty tile (or cell) has bounds that
+    /// no depth meets. A ray with content near walks without trying
+    /// [`RayState::meets_nothing`], as its depth span runs from the
+    /// content's front on.
     #[inline]
     fn sees_nothing(&self, sc: &Scene<'_>, ray: &Ray) -> Option<bool> {
         if ray.origin.map(f32::to_bits) != self.at {
