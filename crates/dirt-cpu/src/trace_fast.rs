@@ -744,10 +744,8 @@ struct Apex<'a> {
     view: &'a View,
     /// The apex's bits: a ray starts there when its origin has them.
     at: [u32; 3],
-    tan: f32,
     /// `1 / step`.
     per_step: f32,
-    tiles: u32,
     /// Half the width, in tiles, of the range around the direction's tile
     /// coordinate that holds every tile a walk of such a ray can reach.
     margin: f32,
@@ -780,9 +778,7 @@ impl<'a> Apex<'a> {
         margin.is_finite().then(|| Apex {
             view: v,
             at: v.apex.to_array().map(f32::to_bits),
-            tan: v.tan,
             per_step: 1.0 / v.step,
-            tiles: v.tiles,
             margin,
             content: Vec::new(),
         })
@@ -790,12 +786,12 @@ impl<'a> Apex<'a> {
 
     /// Words a row of [`Apex::content`] takes.
     fn row_words(&self) -> usize {
-        (self.tiles as usize).div_ceil(64)
+        (self.view.tiles as usize).div_ceil(64)
     }
 
     /// Sets [`Apex::content`] from the view's depth bounds (Hi-Z level 0).
     fn mark(&mut self, bounds: &[[u32; 2]]) {
-        let (tiles, words) = (self.tiles as usize, self.row_words());
+        let (tiles, words) = (self.view.tiles as usize, self.row_words());
         let mut content = vec![0u64; tiles * words];
         for (j, row) in bounds.chunks(tiles).enumerate() {
             for (i, &[zmin, zmax]) in row.iter().enumerate() {
@@ -833,16 +829,16 @@ impl<'a> Apex<'a> {
         }
         // One division: the margin covers a few more roundings.
         let r = 1.0 / dz;
-        let x = (dx * r + self.tan) * self.per_step;
-        let y = (dy * r + self.tan) * self.per_step;
+        let x = (dx * r + self.view.tan) * self.per_step;
+        let y = (dy * r + self.view.tan) * self.per_step;
         // Wider for a coordinate so large that its ulps approach a tile.
         let m = self.margin + fmax(x.abs(), y.abs()) * (1.0 / 65536.0);
-        let tiles = self.tiles as f32;
+        let tiles = self.view.tiles as f32;
         if !(x + m >= 0.0 && y + m >= 0.0 && x - m < tiles && y - m < tiles) {
             // Beside the view (or not finite: left to the walk).
             return (x.is_finite() && y.is_finite()).then_some(true);
         }
-        let last = self.tiles - 1;
+        let last = self.view.tiles - 1;
         let r = Reach {
             i: (floor_index(x - m, last), floor_index(x + m, last)),
             j: (floor_index(y - m, last), floor_index(y + m, last)),
@@ -1033,8 +1029,6 @@ pub(crate) fn trace_ray<const STATS: bool>(
                 sc.to_content(f, &vrs[f], &mut ivs[f]);
             }
         }
-    }
-    if !STATS {
         scratch.next_ray();
     }
     let mut st = RayState::<STATS> {
