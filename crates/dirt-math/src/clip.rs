@@ -617,9 +617,19 @@ mod tests {
         // for_each_covered_tile (column strips) reports exactly the tiles and
         // extents of tile_depth_extent over the tile range, bit for bit.
         #[test]
-        fn covered_tiles_equal_tile_extents(a in v3(), b in v3(), c in v3(), face in 0usize..6, tiles in 1u32..16) {
-            let vs = cube(tiles);
-            let v = &vs.views[face];
+        fn covered_tiles_equal_tile_extents(a in v3(), b in v3(), c in v3(), face in 0usize..9, tiles in 1u32..16) {
+            // The cube's six faces, then orthographic views: one, and the two of a split.
+            let bounds = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
+            let vs = match face {
+                0..6 => cube(tiles),
+                6 => ViewSet::ortho(crate::view::Axis::Y, None, &bounds, tiles),
+                _ => ViewSet::ortho(crate::view::Axis::X, Some(0.3), &bounds, tiles),
+            };
+            let v = &vs.views[match face {
+                0..6 => face,
+                6 | 7 => 0,
+                _ => 1,
+            }];
             let tri = [v.to_view(a), v.to_view(b), v.to_view(c)];
             let mut got = Vec::new();
             for_each_covered_tile(v, tri, |i, j, lo, hi| got.push((i, j, lo.to_bits(), hi.to_bits())));
