@@ -5,8 +5,8 @@
 //! flight that slack decided the build's peak memory. Here each new block
 //! holds as many items as the blocks before it (so few blocks), at least
 //! [`MIN`] and at most [`MAX`]: the slack stays below one block and under the
-//! items already kept, and nothing is copied. [`Groups`] adds where each
-//! triangle's items end: what a pass keeps for one piece of triangles;
+//! items already kept, and nothing is copied. [`Groups`] adds how many items
+//! each triangle has: what a pass keeps for one piece of triangles;
 //! [`Budget`] bounds what all pieces keep together.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -61,18 +61,33 @@ impl<T: Copy> Blocks<T> {
 }
 
 /// [`Blocks`] in consecutive groups (one per triangle of a piece).
+///
+/// A group's size takes one byte where it is below [`WIDE`] (a triangle's
+/// fragments or lists, nearly always), else [`WIDE`] and its size in
+/// `wide`: four bytes a triangle were as much as the items themselves on a
+/// deforming grid (about two a triangle) and took the build's peak past its
+/// bound (`peak_memory.rs`).
 #[derive(Debug)]
 pub(crate) struct Groups<T> {
-    /// Where each group's items end; below `u32::MAX` items in all (the
-    /// build's budgets keep them there).
-    ends: Vec<u32>,
+    /// Each closed group's size, or [`WIDE`].
+    sizes: Vec<u8>,
+    /// The sizes of the groups of [`WIDE`] items or more, in order; below
+    /// `u32::MAX` items in all (the build's budgets keep them there).
+    wide: Vec<u32>,
+    /// Items in the closed groups (where the open group starts).
+    closed: usize,
     items: Blocks<T>,
 }
+
+/// The size byte of a group of this many items or more.
+const WIDE: u8 = u8::MAX;
 
 impl<T: Copy> Groups<T> {
     pub(crate) fn new() -> Self {
         Groups {
-            ends: Vec::new(),
+            sizes: Vec::new(),
+            wide: Vec::new(),
+            closed: 0,
             items: Blocks::new(),
         }
     }
@@ -89,14 +104,22 @@ impl<T: Copy> Groups<T> {
 
     /// Ends the open group (its items are those pushed since the last close).
     pub(crate) fn close(&mut self) {
-        self.ends
-            .push(self.items.len().min(u32::MAX as usize) as u32);
+        let n = self.items.len() - self.closed;
+        match u8::try_from(n) {
+            Ok(b) if b < WIDE => self.sizes.push(b),
+            _ => {
+                self.sizes.push(WIDE);
+                self.wide.push(n.min(u32::MAX as usize) as u32);
+            }
+        }
+        self.closed = self.items.len();
     }
 
     /// Frees the unused room (the pass is done with these groups).
     pub(crate) fn trim(&mut self) {
         self.items.trim();
-        self.ends.shrink_to_fit();
+        self.sizes.shrink_to_fit();
+        self.wide.shrink_to_fit();
     }
 
     /// Every item, in order, without its group.
@@ -115,28 +138,30 @@ impl<T: Copy> Groups<T> {
         mut item: impl FnMut(&mut S, usize, T),
         mut end: impl FnMut(&mut S, usize),
     ) {
-        let ends = &self.ends;
-        let (mut g, mut done) = (0usize, 0usize);
-        for block in &self.items.blocks {
-            let mut rest = block.as_slice();
-            while !rest.is_empty() {
-                // Close the groups that end here, then take the open group's
-                // items from this block (it may go on in the next).
-                while g < ends.len() && ends[g] as usize <= done {
-                    end(state, g);
-                    g += 1;
+        let mut wide = self.wide.iter();
+        let mut blocks = self.items.blocks.iter();
+        let mut rest: &[T] = &[];
+        for (g, &size) in self.sizes.iter().enumerate() {
+            let mut n = if size == WIDE {
+                wide.next().map_or(0, |&n| n as usize)
+            } else {
+                usize::from(size)
+            };
+            // The group's items, from this block and the next ones.
+            while n > 0 {
+                if rest.is_empty() {
+                    match blocks.next() {
+                        Some(b) => rest = b.as_slice(),
+                        None => break,
+                    }
                 }
-                let upto = ends.get(g).map_or(usize::MAX, |&e| e as usize);
-                let take = (upto - done).min(rest.len());
-                let (head, tail) = rest.split_at(take);
+                let (head, tail) = rest.split_at(n.min(rest.len()));
                 for &x in head {
                     item(state, g, x);
                 }
-                done += take;
+                n -= head.len();
                 rest = tail;
             }
-        }
-        for g in g..ends.len() {
             end(state, g);
         }
     }
@@ -242,11 +267,14 @@ mod tests {
     fn groups_give_back_each_groups_items() {
         // Empty groups first, in the middle and last; groups across the
         // first blocks' ends (MIN, then 2·MIN items) and one larger than a block.
-        let cases: [&[usize]; 4] = [
+        // Sizes on both sides of the one-byte ones (WIDE).
+        let w = usize::from(WIDE);
+        let cases: [&[usize]; 5] = [
             &[2, 0, 1, 3],
             &[0, 0, 5, 0],
             &[MIN - 1, 2, 0, MIN, 7, 0, 0],
             &[3, MAX + 100, 0, 2 * MAX, 1, 0],
+            &[w - 1, w, w + 1, 1, w, 0, 3 * w],
         ];
         for sizes in cases {
             let got = walk(sizes);
