@@ -507,6 +507,25 @@ mod tests {
         )
     }
 
+    /// View `face` of nine: 0..6 the cube's faces, 6 one orthographic
+    /// view, 7 and 8 the two of a split.
+    fn face_view(face: usize, tiles: u32) -> View {
+        let b = Aabb {
+            min: Vec3::splat(-2.0),
+            max: Vec3::splat(2.0),
+        };
+        let vs = match face {
+            0..6 => cube(tiles),
+            6 => ViewSet::ortho(crate::view::Axis::Y, None, &b, tiles),
+            _ => ViewSet::ortho(crate::view::Axis::X, Some(0.3), &b, tiles),
+        };
+        vs.views[match face {
+            0..6 => face,
+            8 => 1,
+            _ => 0,
+        }]
+    }
+
     fn v3() -> impl Strategy<Value = Vec3> {
         (-2.0f32..2.0, -2.0f32..2.0, -2.0f32..2.0).prop_map(|(x, y, z)| Vec3::new(x, y, z))
     }
@@ -550,14 +569,7 @@ mod tests {
         // has a depth inside the tile extent computed by clipping.
         #[test]
         fn clipped_extents_contain_sampled_points(a in v3(), b in v3(), c in v3(), face in 0usize..9, tiles in 1u32..12) {
-            // Faces 0..6: the cube; 6: one orthographic view; 7, 8: the split pair.
-            let b2 = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
-            let vs = match face {
-                0..6 => cube(tiles),
-                6 => ViewSet::ortho(crate::view::Axis::Y, None, &b2, tiles),
-                _ => ViewSet::ortho(crate::view::Axis::X, Some(0.3), &b2, tiles),
-            };
-            let v = &vs.views[match face { 0..6 => face, 8 => 1, _ => 0 }];
+            let v = &face_view(face, tiles);
             let tri = [v.to_view(a), v.to_view(b), v.to_view(c)];
             let poly = clip_triangle_to_view(v, tri);
             let n = 24;
@@ -618,18 +630,7 @@ mod tests {
         // extents of tile_depth_extent over the tile range, bit for bit.
         #[test]
         fn covered_tiles_equal_tile_extents(a in v3(), b in v3(), c in v3(), face in 0usize..9, tiles in 1u32..16) {
-            // The cube's six faces, then orthographic views: one, and the two of a split.
-            let bounds = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
-            let vs = match face {
-                0..6 => cube(tiles),
-                6 => ViewSet::ortho(crate::view::Axis::Y, None, &bounds, tiles),
-                _ => ViewSet::ortho(crate::view::Axis::X, Some(0.3), &bounds, tiles),
-            };
-            let v = &vs.views[match face {
-                0..6 => face,
-                6 | 7 => 0,
-                _ => 1,
-            }];
+            let v = &face_view(face, tiles);
             let tri = [v.to_view(a), v.to_view(b), v.to_view(c)];
             let mut got = Vec::new();
             for_each_covered_tile(v, tri, |i, j, lo, hi| got.push((i, j, lo.to_bits(), hi.to_bits())));
