@@ -82,15 +82,7 @@ pub fn fill_primitives(
     buckets: u32,
     tris: &[Triangle],
 ) -> Result<IdLists, CpuError> {
-    fill_keeping(
-        views,
-        depth,
-        buckets,
-        tris,
-        Fragments::default(),
-        KEEP_MAX,
-        dense_from(rayon::current_num_threads()),
-    )
+    fill_primitives_from(views, depth, buckets, tris, Fragments::default())
 }
 
 /// [`fill_primitives`] from the fragments `fill_depth` kept
@@ -116,8 +108,8 @@ pub fn fill_primitives_from(
 }
 
 /// [`fill_primitives_from`] keeping at most `keep_max` nodes from the count
-/// pass, counting by ranges the pieces of at least `dense` nodes a triangle
-/// ([`dense_from`]).
+/// pass, counting by ranges the pieces of at least `dense_nodes` nodes a
+/// triangle, every piece where it is 0 ([`dense_from`]).
 fn fill_keeping(
     views: &ViewSet,
     depth: &[[u32; 2]],
@@ -125,7 +117,7 @@ fn fill_keeping(
     tris: &[Triangle],
     fragments: Fragments,
     keep_max: usize,
-    dense: usize,
+    dense_nodes: usize,
 ) -> Result<IdLists, CpuError> {
     let n_lists = depth.len() * buckets as usize;
     // Count. The total comes from the prefix sum, not from one counter every
@@ -151,13 +143,14 @@ fn fill_keeping(
         .map(|(frags, piece)| {
             // Per triangle, the lists it joins, from its fragments: kept by
             // fill_depth, or found again. A piece whose fragments already
-            // number `dense` a triangle is left to `count_by_range`; the others
-            // are counted here, as their lists are found.
+            // number `dense_nodes` a triangle (any piece, where that is 0) is
+            // left to `count_by_range`; the others are counted here, as their
+            // lists are found.
             let dense = keep
-                && (dense == 0
+                && (dense_nodes == 0
                     || frags
                         .as_ref()
-                        .is_some_and(|f| f.len() >= dense * piece.len()));
+                        .is_some_and(|f| f.len() >= dense_nodes * piece.len()));
             let mut lists = Groups::new();
             let add = |lists: &mut Groups<u32>, k: usize| {
                 if !dense {
@@ -214,12 +207,12 @@ fn fill_keeping(
         return Err(CpuError::TooManyNodes { nodes: acc });
     };
     let mut ids: Vec<AtomicU32> = (0..acc).map(|_| AtomicU32::new(u32::MAX)).collect();
-    // Every piece's lists kept and most of them dense: each range of lists
-    // is filled by one task from all pieces in order, with plain stores, and
-    // every list comes out in triangle order. Else the fill's cursors are
-    // shared and the lists sorted afterwards.
+    // Every piece's lists kept and, where density decides, most of them
+    // dense: each range of lists is filled by one task from all pieces in
+    // order, with plain stores, and every list comes out in triangle order.
+    // Else the fill's cursors are shared and the lists sorted afterwards.
     let in_order =
-        kept.iter().all(Option::is_some) && acc as usize >= dense.saturating_mul(tris.len());
+        kept.iter().all(Option::is_some) && acc as usize >= dense_nodes.saturating_mul(tris.len());
     if in_order {
         fill_by_range(&mut at[1..], &mut ids, &kept);
     } else {
@@ -280,7 +273,7 @@ const DENSE: usize = 8;
 /// so past a few threads the density rule ([`DENSE`]) takes over.
 const RANGE_THREADS: usize = 4;
 
-/// The `dense` of [`fill_keeping`] for a pool of `threads` threads.
+/// The `dense_nodes` of [`fill_keeping`] for a pool of `threads` threads.
 fn dense_from(threads: usize) -> usize {
     if threads <= RANGE_THREADS { 0 } else { DENSE }
 }
@@ -426,7 +419,7 @@ mod tests {
             let frags: usize = every.pieces.iter().flatten().map(|p| p.len()).sum();
             assert!(every.pieces.iter().all(Option::is_some) && frags > 0);
             // Every piece counted by ranges, the dense ones, none.
-            for dense in [0, DENSE, 1 << 20] {
+            for dense_nodes in [0, DENSE, 1 << 20] {
                 for keep_frags in [0, frags / 2, frags] {
                     for keep_nodes in [0, nodes / 3, nodes - 1, KEEP_MAX] {
                         let (d, kept) =
@@ -435,10 +428,11 @@ mod tests {
                             d, depth,
                             "{name}: the depth bounds do not depend on what is kept"
                         );
-                        let some = fill_keeping(&views, &depth, b, &tris, kept, keep_nodes, dense)
-                            .expect("fill");
+                        let some =
+                            fill_keeping(&views, &depth, b, &tris, kept, keep_nodes, dense_nodes)
+                                .expect("fill");
                         let at = format!(
-                            "{name}, fragments {keep_frags}, nodes {keep_nodes}, dense {dense}"
+                            "{name}, fragments {keep_frags}, nodes {keep_nodes}, dense {dense_nodes}"
                         );
                         assert_eq!(some.offsets, all.offsets, "{at}");
                         assert_eq!(some.ids, all.ids, "{at}");
