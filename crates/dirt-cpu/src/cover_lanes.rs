@@ -77,9 +77,17 @@ fn eval_lanes(h: &HalfSpace, p: &[L; 3], eps: f32) -> L {
 
 /// The covers of lanes `tri` (world-space vertex `n`, component `c`, lane
 /// `k` at `tri[n][c][k]`) in view `v` into `covers`, and their view-space
-/// vertices into `tv` (written in place: returned, they were copied).
+/// vertices into `tv` (written in place: returned, they were copied). With
+/// `inside`, also clears the lanes that may not lie inside the frustum
+/// shrunk by `eps` (every vertex inside every plane: the frustum is convex).
 #[inline(always)]
-fn cover_lanes(v: &View, tri: &[[L; 3]; 3], covers: &mut [Cover; LANES], tv: &mut [[L; 3]; 3]) {
+fn cover_lanes(
+    v: &View,
+    tri: &[[L; 3]; 3],
+    covers: &mut [Cover; LANES],
+    tv: &mut [[L; 3]; 3],
+    mut inside: Option<&mut [bool; LANES]>,
+) {
     // View::to_view: q = p - apex, then dot3 with right, up, forward.
     let apex = v.apex.to_array();
     for (tv, tri) in tv.iter_mut().zip(tri) {
@@ -108,6 +116,13 @@ fn cover_lanes(v: &View, tri: &[[L; 3]; 3], covers: &mut [Cover; LANES], tv: &mu
             from_fn(|k| !(f[0][k] >= 0.0) & !(f[1][k] >= 0.0) & !(f[2][k] >= 0.0));
         outside = from_fn(|k| outside[k] | (!cut[k] & all_out[k]));
         cut = from_fn(|k| cut[k] | !all_in[k]);
+        if let Some(inside) = inside.as_deref_mut() {
+            // `f = a + eps` at least `3·eps` leaves `a − eps`, the plane
+            // shrunk by `eps`, positive through both roundings.
+            let deep = 3.0 * v.eps;
+            *inside =
+                from_fn(|k| inside[k] & (f[0][k] >= deep) & (f[1][k] >= deep) & (f[2][k] >= deep));
+        }
     }
     // Polygon::depth_range of the triangle: folds from ±inf in vertex order.
     let mut zlo = [f32::INFINITY; LANES];
@@ -261,21 +276,28 @@ fn two_tiles(v: &View, tv: &[[L; 3]; 3], k: usize, x_split: bool, lower: u32) ->
 /// [`for_each_fragment`](crate::fill_depth::for_each_fragment) for every
 /// triangle of `tris` in turn: `item(state, tile, zlo, zhi)` for each of a
 /// triangle's fragments, in its order, then `end(state)`.
+///
+/// Returns, for a set with one view with content, whether every triangle
+/// was found inside that view's frustum shrunk by its `eps` (`false` may
+/// also mean one lies within a few `eps` of a plane); `false` for any
+/// other set (not computed).
 pub(crate) fn for_each_fragment_in<S>(
     set: &ViewSet,
     tris: &[Triangle],
     state: &mut S,
     mut item: impl FnMut(&mut S, usize, f32, f32),
     mut end: impl FnMut(&mut S),
-) {
+) -> bool {
     let views: Vec<&View> = set.views.iter().filter(|v| v.has_content).collect();
     if views.len() > MAX_VIEWS {
         for t in tris {
             for_each_fragment(set, t, |tile, lo, hi| item(state, tile, lo, hi));
             end(state);
         }
-        return;
+        return false;
     }
+    let one = views.len() == 1;
+    let mut inside = [one; LANES];
     let mut covers = [[Cover::Nothing; LANES]; MAX_VIEWS];
     let mut tvs = [[[[0.0; LANES]; 3]; 3]; MAX_VIEWS];
     for group in tris.chunks(LANES) {
@@ -283,7 +305,8 @@ pub(crate) fn for_each_fragment_in<S>(
         let tri: [[L; 3]; 3] =
             from_fn(|n| from_fn(|c| from_fn(|k| group[k.min(group.len() - 1)].v[n][c])));
         for (f, v) in views.iter().enumerate() {
-            cover_lanes(v, &tri, &mut covers[f], &mut tvs[f]);
+            let inside = one.then_some(&mut inside);
+            cover_lanes(v, &tri, &mut covers[f], &mut tvs[f], inside);
         }
         for k in 0..group.len() {
             for (f, v) in views.iter().enumerate() {
@@ -316,11 +339,13 @@ pub(crate) fn for_each_fragment_in<S>(
             end(state);
         }
     }
+    one && inside.iter().all(|&x| x)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dirt_math::clip::view_frustum;
     use dirt_math::view::Axis;
     use dirt_math::{Aabb, Vec3};
     use proptest::prelude::*;
@@ -382,8 +407,13 @@ mod tests {
     type Walk = Vec<(usize, usize, u32, u32)>;
 
     fn lanes(views: &ViewSet, tris: &[Triangle]) -> Walk {
+        lanes_inside(views, tris).0
+    }
+
+    /// [`lanes`], and whether they found every triangle inside the views.
+    fn lanes_inside(views: &ViewSet, tris: &[Triangle]) -> (Walk, bool) {
         let mut got = (Walk::new(), 0usize);
-        for_each_fragment_in(
+        let inside = for_each_fragment_in(
             views,
             tris,
             &mut got,
@@ -391,7 +421,26 @@ mod tests {
             |(_, t)| *t += 1,
         );
         assert_eq!(got.1, tris.len(), "one end a triangle");
-        got.0
+        (got.0, inside)
+    }
+
+    /// Whether every vertex lies inside every plane of the one view with
+    /// content, shrunk by its `eps`.
+    fn plain_inside(views: &ViewSet, tris: &[Triangle]) -> bool {
+        let [v] = &views
+            .views
+            .iter()
+            .filter(|v| v.has_content)
+            .collect::<Vec<_>>()[..]
+        else {
+            return false;
+        };
+        tris.iter().all(|t| {
+            (0..3).all(|k| {
+                let p = v.to_view(t.vertex(k));
+                view_frustum(v).iter().all(|h| h.eval(p, -v.eps) >= 0.0)
+            })
+        })
     }
 
     fn plain(views: &ViewSet, tris: &[Triangle]) -> Walk {
@@ -414,7 +463,33 @@ mod tests {
             centre in (-0.5f32..0.5, -0.5f32..0.5, -0.5f32..0.5),
         ) {
             let views = view_set(kind, tiles, Vec3::new(centre.0, centre.1, centre.2));
-            prop_assert_eq!(lanes(&views, &tris), plain(&views, &tris));
+            let (walk, inside) = lanes_inside(&views, &tris);
+            prop_assert_eq!(walk, plain(&views, &tris));
+            // Found inside only where it is, and only for a set of one view.
+            prop_assert!(!inside || plain_inside(&views, &tris));
+            prop_assert!(!inside || views.slots() == 1);
+        }
+
+        /// Triangles well inside a single view, or an orthographic one, are
+        /// found inside it; one crossing a plane is not.
+        #[test]
+        fn triangles_well_inside_one_view_are_found_inside(
+            tris in prop::collection::vec((v3(), v3(), v3()), 1..30),
+            kind in 1usize..3,
+            tiles in 1u32..70,
+            crossing in any::<bool>(),
+        ) {
+            // Shrunk to a quarter of the views' bounds, about their centre.
+            let mut tris: Vec<Triangle> = tris
+                .iter()
+                .map(|&(a, b, c)| Triangle::new(a * 0.01, b * 0.01, c * 0.01))
+                .collect();
+            let views = view_set(kind, tiles, Vec3::ZERO);
+            if crossing {
+                tris.push(Triangle::new(Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::splat(40.0)));
+            }
+            let (_, inside) = lanes_inside(&views, &tris);
+            prop_assert_eq!(inside, !crossing);
         }
     }
 
@@ -467,7 +542,7 @@ mod tests {
         let tri: [[L; 3]; 3] =
             from_fn(|n| from_fn(|c| from_fn(|k| tris[k.min(tris.len() - 1)].v[n][c])));
         let mut covers = [Cover::Nothing; LANES];
-        cover_lanes(v, &tri, &mut covers, &mut [[[0.0; LANES]; 3]; 3]);
+        cover_lanes(v, &tri, &mut covers, &mut [[[0.0; LANES]; 3]; 3], None);
         assert!(matches!(covers[0], Cover::One(..)), "{:?}", covers[0]);
         assert!(matches!(covers[1], Cover::Range(..)), "{:?}", covers[1]);
         assert!(matches!(covers[2], Cover::Clip), "{:?}", covers[2]);

@@ -56,6 +56,10 @@ pub(crate) fn for_each_fragment(views: &ViewSet, t: &Triangle, mut f: impl FnMut
 #[derive(Debug, Default)]
 pub struct Fragments {
     pub(crate) pieces: Vec<Option<Groups<(u32, f32, f32)>>>,
+    /// For a set of one view with content: whether every triangle lies
+    /// inside its frustum shrunk by its `eps`, so that the view sees all
+    /// of the scene; `false` for other sets.
+    pub(crate) inside: bool,
 }
 
 /// Depth bounds of every tile of every view, encoded.
@@ -104,7 +108,7 @@ pub fn fill_depth_keeping(
             let room = budget.room();
             // Fragments seen, whether the piece still keeps them, and those kept.
             let mut st = (0usize, room > 0, Groups::new());
-            for_each_fragment_in(
+            let inside = for_each_fragment_in(
                 views,
                 piece,
                 &mut st,
@@ -142,12 +146,14 @@ pub fn fill_depth_keeping(
             // show that the structure will be larger, and the budget of the
             // pieces after this one grows with them (peak_memory.rs).
             budget.raise(seen / EARN, ceiling);
-            budget.settle(found, keep)
+            (budget.settle(found, keep), inside)
         })
-        .collect();
+        .collect::<Vec<_>>();
+    let inside = pieces.iter().all(|p| p.1);
+    let pieces = pieces.into_iter().map(|p| p.0).collect();
     let depth = bounds
         .into_iter()
         .map(|[a, b]| [a.into_inner(), b.into_inner()])
         .collect();
-    (depth, Fragments { pieces })
+    (depth, Fragments { pieces, inside })
 }

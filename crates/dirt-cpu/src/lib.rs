@@ -81,6 +81,11 @@ pub struct Ads {
     pub lists: IdLists,
     pub timings: BuildTimings,
     pub triangles: usize,
+    /// For a single perspective view: whether every triangle lies inside
+    /// its frustum shrunk by its `eps`, so that its hits are every ray's
+    /// closest (`fill_depth` finds it while it covers the triangles).
+    /// `false` for other sets, where it is not needed.
+    pub(crate) sees_all: bool,
 }
 
 /// Runs `f` on a thread of rayon's pool (the caller's own, if it is one).
@@ -124,6 +129,7 @@ impl Ads {
         let tiles = views.slots() * views.views.first().map_or(0, |v| v.tile_count());
         let keep = tiles.saturating_mul(params.buckets as usize) * 2 / 3;
         let (depth, fragments) = fill_depth::fill_depth_keeping(&views, tris, keep);
+        let sees_all = fragments.inside && views.kind == dirt_core::ViewsKind::Single;
         let t1 = Instant::now();
         // The depth bounds become Hi-Z level 0, which fill_primitives reads.
         let hiz = mip_depth::mip_depth_over(&views, depth);
@@ -148,6 +154,7 @@ impl Ads {
             lists,
             timings,
             triangles: tris.len(),
+            sees_all,
         })
     }
 
