@@ -1091,6 +1091,7 @@ pub(crate) fn trace_ray<const STATS: bool>(
 }
 
 impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
+    #[inline(always)]
     fn new(sc: &'s Scene<'a>, scratch: &'s mut Scratch, ray: &'s Ray, looked: bool) -> Self {
         RayState {
             sc,
