@@ -207,8 +207,74 @@ impl Polygon {
     pub fn clip_into(&self, h: &HalfSpace, eps: f32, out: &mut Polygon) -> bool {
         let n = self.len;
         let mut f = [0.0f32; MAX_POLY];
-        // `HalfSpace::eval` per vertex, with the match taken once.
-        let vs = &self.v[..n];
+        self.eval_into(h, eps, &mut f);
+        let inside = f[..n].iter().filter(|&&fk| fk >= 0.0).count();
+        if inside == n {
+            return false;
+        }
+        let mut m = 0;
+        if inside > 0 {
+            for k in 0..n {
+                let next = if k + 1 == n { 0 } else { k + 1 };
+                let p = self.v[k];
+                let q = self.v[next];
+                let (fp, fq) = (f[k], f[next]);
+                if fp >= 0.0 && m < MAX_POLY {
+                    out.v[m] = p;
+                    m += 1;
+                }
+                if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
+                    let w = fp / (fp - fq);
+                    out.v[m] = [
+                        p[0] + (q[0] - p[0]) * w,
+                        p[1] + (q[1] - p[1]) * w,
+                        p[2] + (q[2] - p[2]) * w,
+                    ];
+                    m += 1;
+                }
+            }
+        }
+        out.len = m;
+        true
+    }
+
+    /// `self.clip(h, eps).depth_range()`, bit for bit, without the clipped
+    /// polygon: only the depths of its vertices are computed, folded in its
+    /// vertex order (`fmin` and `fmax` keep the first of two zeros, so the
+    /// order is kept). The last clip of a tile's coverage needs no more.
+    pub fn clipped_depth_range(&self, h: &HalfSpace, eps: f32) -> Option<(f32, f32)> {
+        let n = self.len;
+        let mut f = [0.0f32; MAX_POLY];
+        self.eval_into(h, eps, &mut f);
+        let inside = f[..n].iter().filter(|&&fk| fk >= 0.0).count();
+        if inside == n {
+            return self.depth_range();
+        }
+        let (mut lo, mut hi, mut m) = (f32::INFINITY, f32::NEG_INFINITY, 0);
+        if inside > 0 {
+            for k in 0..n {
+                let next = if k + 1 == n { 0 } else { k + 1 };
+                let (pz, qz) = (self.v[k][2], self.v[next][2]);
+                let (fp, fq) = (f[k], f[next]);
+                if fp >= 0.0 && m < MAX_POLY {
+                    (lo, hi) = (fmin(lo, pz), fmax(hi, pz));
+                    m += 1;
+                }
+                if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
+                    let w = fp / (fp - fq);
+                    let z = pz + (qz - pz) * w;
+                    (lo, hi) = (fmin(lo, z), fmax(hi, z));
+                    m += 1;
+                }
+            }
+        }
+        (m > 0).then_some((lo, hi))
+    }
+
+    /// [`HalfSpace::eval`] of every vertex, with the match taken once.
+    #[inline(always)]
+    fn eval_into(&self, h: &HalfSpace, eps: f32, f: &mut [f32; MAX_POLY]) {
+        let vs = &self.v[..self.len];
         match *h {
             HalfSpace::Lo { axis, s } => {
                 for (fk, p) in f.iter_mut().zip(vs) {
@@ -241,34 +307,6 @@ impl Polygon {
                 }
             }
         }
-        let inside = f[..n].iter().filter(|&&fk| fk >= 0.0).count();
-        if inside == n {
-            return false;
-        }
-        let mut m = 0;
-        if inside > 0 {
-            for k in 0..n {
-                let next = if k + 1 == n { 0 } else { k + 1 };
-                let p = self.v[k];
-                let q = self.v[next];
-                let (fp, fq) = (f[k], f[next]);
-                if fp >= 0.0 && m < MAX_POLY {
-                    out.v[m] = p;
-                    m += 1;
-                }
-                if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
-                    let w = fp / (fp - fq);
-                    out.v[m] = [
-                        p[0] + (q[0] - p[0]) * w,
-                        p[1] + (q[1] - p[1]) * w,
-                        p[2] + (q[2] - p[2]) * w,
-                    ];
-                    m += 1;
-                }
-            }
-        }
-        out.len = m;
-        true
     }
 
     /// Depth range of the vertices, or `None` when empty.
@@ -453,38 +491,65 @@ pub fn cover_tiles(
     mut f: impl FnMut(u32, u32, f32, f32),
 ) {
     // Scratch polygons for the per-tile clips: written only as far as used,
-    // and never copied (each clip reads one and writes the next).
-    let (mut a, mut b, mut lo, mut hi) = (
-        Polygon::EMPTY,
-        Polygon::EMPTY,
-        Polygon::EMPTY,
-        Polygon::EMPTY,
-    );
+    // and never copied (each clip reads one and writes the next). The last
+    // clip of a tile computes only depths (`clip_pair_depth_range`).
+    let (mut a, mut lo, mut hi) = (Polygon::EMPTY, Polygon::EMPTY, Polygon::EMPTY);
     for i in i0..=i1 {
         // One column: no x planes (tile_depth_extent).
+        let x_planes = || {
+            let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
+            [lo_x, hi_x]
+        };
+        if j0 == j1 {
+            // One row: the column's clip is the tile's.
+            let depths = if i0 == i1 {
+                poly.depth_range()
+            } else {
+                let [lo_x, hi_x] = x_planes();
+                clip_pair_depth_range(poly, [&lo_x, &hi_x], v.eps, &mut lo)
+            };
+            if let Some((lo, hi)) = depths {
+                f(i, j0, lo - v.eps, hi + v.eps);
+            }
+            continue;
+        }
         let column = if i0 == i1 {
             poly
         } else {
-            let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
+            let [lo_x, hi_x] = x_planes();
             let p = clip_pair(poly, [&lo_x, &hi_x], v.eps, &mut lo, &mut hi);
             if p.len == 0 {
                 continue;
             }
             p
         };
-        if j0 == j1 {
-            if let Some((lo, hi)) = column.depth_range() {
-                f(i, j0, lo - v.eps, hi + v.eps);
-            }
-            continue;
-        }
         for j in j0..=j1 {
             let [_, _, lo_y, hi_y] = block_frustum(v, i, i + 1, j, j + 1);
-            let p = clip_pair(column, [&lo_y, &hi_y], v.eps, &mut a, &mut b);
-            if let Some((lo, hi)) = p.depth_range() {
+            if let Some((lo, hi)) = clip_pair_depth_range(column, [&lo_y, &hi_y], v.eps, &mut a) {
                 f(i, j, lo - v.eps, hi + v.eps);
             }
         }
+    }
+}
+
+/// `clip_pair(..).depth_range()`: the second clip computes only depths
+/// ([`Polygon::clipped_depth_range`]).
+#[inline]
+fn clip_pair_depth_range(
+    poly: &Polygon,
+    [h0, h1]: [&HalfSpace; 2],
+    eps: f32,
+    a: &mut Polygon,
+) -> Option<(f32, f32)> {
+    let p = if poly.clip_into(h0, eps, a) {
+        &*a
+    } else {
+        poly
+    };
+    if p.len > 0 {
+        p.clipped_depth_range(h1, eps)
+    } else {
+        None
     }
 }
 
@@ -603,10 +668,14 @@ mod tests {
             let mut fast = Polygon::triangle(v.to_view(a), v.to_view(b), v.to_view(c));
             let mut plain = fast;
             let planes: Vec<HalfSpace> = view_frustum(v).into_iter().chain(block_frustum(v, i, i + 1, j, j + 1)).collect();
+            let range_bits = |r: Option<(f32, f32)>| r.map(|(lo, hi)| (lo.to_bits(), hi.to_bits()));
             for h in &planes {
+                // Only the depths of the clip: those of the clipped polygon.
+                let depths = fast.clipped_depth_range(h, v.eps);
                 fast.clip(h, v.eps);
                 plain = clip_plain(&plain, h, v.eps);
                 prop_assert_eq!(bits(&fast), bits(&plain));
+                prop_assert_eq!(range_bits(depths), range_bits(plain.depth_range()));
             }
         }
 
