@@ -93,7 +93,7 @@ pub fn fill_depth_keeping(
         0
     };
     let budget = Budget::new(keep_max.min(ceiling));
-    let pieces = tris
+    let (pieces, inside): (Vec<_>, Vec<bool>) = tris
         .par_chunks(PIECE)
         // A task a piece: pieces differ in cost (large triangles cover many
         // tiles), and halves split only as rayon sees fit were left uneven
@@ -148,9 +148,8 @@ pub fn fill_depth_keeping(
             budget.raise(seen / EARN, ceiling);
             (budget.settle(found, keep), inside)
         })
-        .collect::<Vec<_>>();
-    let inside = pieces.iter().all(|p| p.1);
-    let pieces = pieces.into_iter().map(|p| p.0).collect();
+        .unzip();
+    let inside = inside.iter().all(|&x| x);
     let depth = bounds
         .into_iter()
         .map(|[a, b]| [a.into_inner(), b.into_inner()])

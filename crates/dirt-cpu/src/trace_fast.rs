@@ -1028,20 +1028,18 @@ pub(crate) fn trace_ray<const STATS: bool>(
     // walk is not tried for meeting nothing, which only a range ending
     // before that content would.
     let mut looked = false;
-    let mut direct = None;
     if !STATS && let Some(apex) = &sc.apex {
         match apex.look(sc, ray) {
             Some(None) => return (Hit::MISS, RayStats::default()),
-            Some(Some(tiles)) if apex.direct => direct = Some((apex.view, tiles)),
+            Some(Some(tiles)) if apex.direct => {
+                scratch.next_ray();
+                let mut st = RayState::<STATS>::new(sc, scratch, ray, true);
+                st.direct(apex.view, &tiles);
+                return (st.best, st.stats);
+            }
             Some(Some(_)) => looked = true,
             None => {}
         }
-    }
-    if let Some((v, tiles)) = direct {
-        scratch.next_ray();
-        let mut st = RayState::<STATS>::new(sc, scratch, ray, true);
-        st.direct(v, &tiles);
-        return (st.best, st.stats);
     }
     let n = sc.views.len();
     let (vrs, mut ivs, exits) = sc.lanes.enter(ray);
