@@ -214,25 +214,17 @@ impl Polygon {
         }
         let mut m = 0;
         if inside > 0 {
-            for k in 0..n {
-                let next = if k + 1 == n { 0 } else { k + 1 };
-                let p = self.v[k];
-                let q = self.v[next];
-                let (fp, fq) = (f[k], f[next]);
-                if fp >= 0.0 && m < MAX_POLY {
-                    out.v[m] = p;
-                    m += 1;
-                }
-                if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
-                    let w = fp / (fp - fq);
-                    out.v[m] = [
+            self.clipped_each(&f, |p, q, w| {
+                out.v[m] = match w {
+                    None => *p,
+                    Some(w) => [
                         p[0] + (q[0] - p[0]) * w,
                         p[1] + (q[1] - p[1]) * w,
                         p[2] + (q[2] - p[2]) * w,
-                    ];
-                    m += 1;
-                }
-            }
+                    ],
+                };
+                m += 1;
+            });
         }
         out.len = m;
         true
@@ -250,25 +242,45 @@ impl Polygon {
         if inside == n {
             return self.depth_range();
         }
-        let (mut lo, mut hi, mut m) = (f32::INFINITY, f32::NEG_INFINITY, 0);
-        if inside > 0 {
-            for k in 0..n {
-                let next = if k + 1 == n { 0 } else { k + 1 };
-                let (pz, qz) = (self.v[k][2], self.v[next][2]);
-                let (fp, fq) = (f[k], f[next]);
-                if fp >= 0.0 && m < MAX_POLY {
-                    (lo, hi) = (fmin(lo, pz), fmax(hi, pz));
-                    m += 1;
-                }
-                if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
-                    let w = fp / (fp - fq);
-                    let z = pz + (qz - pz) * w;
-                    (lo, hi) = (fmin(lo, z), fmax(hi, z));
-                    m += 1;
-                }
+        if inside == 0 {
+            return None;
+        }
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        self.clipped_each(&f, |p, q, w| {
+            let z = match w {
+                None => p[2],
+                Some(w) => p[2] + (q[2] - p[2]) * w,
+            };
+            (lo, hi) = (fmin(lo, z), fmax(hi, z));
+        });
+        Some((lo, hi))
+    }
+
+    /// The vertices of the polygon clipped by the plane valued `f` at its
+    /// vertices (some inside, some not), in order, at most [`MAX_POLY`]:
+    /// `emit(p, q, None)` for vertex `p` kept, `emit(p, q, Some(w))` for the
+    /// crossing at `p + (q − p)·w` of edge `p → q`.
+    #[inline(always)]
+    fn clipped_each(
+        &self,
+        f: &[f32; MAX_POLY],
+        mut emit: impl FnMut(&[f32; 3], &[f32; 3], Option<f32>),
+    ) {
+        let n = self.len;
+        let mut m = 0;
+        for k in 0..n {
+            let next = if k + 1 == n { 0 } else { k + 1 };
+            let (p, q) = (&self.v[k], &self.v[next]);
+            let (fp, fq) = (f[k], f[next]);
+            if fp >= 0.0 && m < MAX_POLY {
+                emit(p, q, None);
+                m += 1;
+            }
+            if ((fp >= 0.0) != (fq >= 0.0)) && m < MAX_POLY {
+                emit(p, q, Some(fp / (fp - fq)));
+                m += 1;
             }
         }
-        (m > 0).then_some((lo, hi))
     }
 
     /// [`HalfSpace::eval`] of every vertex, with the match taken once.
