@@ -35,16 +35,23 @@ impl<T: Copy> Blocks<T> {
         self.len
     }
 
+    /// Inlined where it is called (once a fragment or list node); a new
+    /// block, once in hundreds of items or more, is left out of line.
+    #[inline]
     pub(crate) fn push(&mut self, x: T) {
         match self.blocks.last_mut() {
             Some(b) if b.len() < b.capacity() => b.push(x),
-            _ => {
-                let mut b = Vec::with_capacity(self.len.clamp(MIN, MAX));
-                b.push(x);
-                self.blocks.push(b);
-            }
+            _ => self.push_to_new_block(x),
         }
         self.len += 1;
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn push_to_new_block(&mut self, x: T) {
+        let mut b = Vec::with_capacity(self.len.clamp(MIN, MAX));
+        b.push(x);
+        self.blocks.push(b);
     }
 
     /// Frees the last block's unused room (the pass is done with this sequence).
