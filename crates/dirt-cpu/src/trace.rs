@@ -123,8 +123,9 @@ pub fn trace_into(
     })
 }
 
-/// Rays a parallel item of [`trace_chunks`] takes.
-const CHUNK: usize = 32;
+/// Rays a parallel item of [`trace_chunks`] takes (looked at from the
+/// apex together first, [`Scene::looks_at_apex`]).
+const CHUNK: usize = trace_fast::LOOKS;
 
 /// The hits of `rays` into `hits` (as long), without statistics. The
 /// parallel items are chunks of [`CHUNK`] rays, each traced in a plain loop:
@@ -134,8 +135,15 @@ fn trace_chunks(sc: &Scene<'_>, rays: &[Ray], hits: &mut [Hit], traversal: Trave
         .zip(hits.par_chunks_mut(CHUNK))
         .with_max_len(RAYS_PER_TASK / CHUNK)
         .for_each_init(Scratch::new, |scratch, (rays, hits)| {
-            for (r, h) in rays.iter().zip(hits) {
-                *h = trace_fast::trace_ray::<false>(sc, scratch, r, traversal).0;
+            let mut looks = [None; trace_fast::LOOKS];
+            sc.looks_at_apex(rays, &mut looks);
+            for ((r, h), look) in rays.iter().zip(hits).zip(looks) {
+                *h = match look {
+                    // A miss whether the ray is valid or not.
+                    Some(None) => Hit::MISS,
+                    _ if r.validate().is_err() => Hit::MISS,
+                    _ => trace_fast::trace_looked::<false>(sc, scratch, r, traversal, look).0,
+                };
             }
         });
 }
