@@ -2,7 +2,8 @@
 //! of the triangles it was built over.
 
 use crate::cost::{self, AutoChoice, CostModel, TraversalChoice};
-use crate::{Ads, CpuError, trace_into};
+use crate::trace::trace_into_from;
+use crate::{Ads, CpuError};
 use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
     Triangle, ViewsKind, check_lengths,
@@ -341,10 +342,9 @@ impl Tracer for DirtCpu {
             tracer: self.name(),
         })?;
         let with_stats = stats.is_some();
-        trace_into(ads, &self.tris, rays, self.traversal, hits, stats);
+        let origin = trace_into_from(ads, &self.tris, rays, self.traversal, hits, stats);
         if self.auto.is_some() && !self.origin_given && !rays.is_empty() {
             // Watching: do all rays since the last build start at one point?
-            let origin = cost::common_origin(rays);
             self.seen = Some(match self.seen.take() {
                 None => Seen {
                     origin,
