@@ -18,7 +18,7 @@
 //! (`tests/trace_fast.rs`).
 
 use crate::Ads;
-use crate::trace_fast::{self, Scene, Scratch};
+use crate::trace_fast::{self, BoxCache, Scene, Scratch};
 use dirt_core::{RAYS_PER_TASK, RayStats, Traversal};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
 use dirt_math::clip::{Interval, clip_ray_to_view, ray_depth};
@@ -61,13 +61,14 @@ pub fn trace_into(
     hits: &mut [Hit],
     stats: Option<&mut [RayStats]>,
 ) {
-    trace_into_from(ads, tris, rays, traversal, hits, stats);
+    trace_into_from(ads, tris, rays, traversal, hits, stats, None);
 }
 
 /// [`trace_into`], returning the point every ray starts at where they all
 /// start at one ([`common_origin`](crate::cost::common_origin)), which it
 /// reads for itself: `DirtCpu` watches it, and reading the rays again cost
-/// about 95 µs for 100,000 (more than a level-2 cache holds).
+/// about 95 µs for 100,000 (more than a level-2 cache holds). With `boxes`,
+/// the triangle boxes are kept across the traces of one build ([`BoxCache`]).
 pub(crate) fn trace_into_from(
     ads: &Ads,
     tris: &[Triangle],
@@ -75,6 +76,7 @@ pub(crate) fn trace_into_from(
     traversal: Traversal,
     hits: &mut [Hit],
     stats: Option<&mut [RayStats]>,
+    boxes: Option<&mut BoxCache>,
 ) -> Option<dirt_math::Vec3> {
     // On a thread of the pool, so that each loop below starts there.
     crate::in_pool(|| {
@@ -86,7 +88,7 @@ pub(crate) fn trace_into_from(
             return origin;
         };
         if stats.is_none() {
-            sc.prepare_for(rays, origin);
+            sc.prepare_for(rays, origin, boxes);
         }
         // Large batches run in a coherent order (nearby rays share cells, lists
         // and triangles in cache); the results land in input order. Rays that

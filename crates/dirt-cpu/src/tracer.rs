@@ -3,6 +3,7 @@
 
 use crate::cost::{self, AutoChoice, CostModel, TraversalChoice};
 use crate::trace::trace_into_from;
+use crate::trace_fast::BoxCache;
 use crate::{Ads, CpuError};
 use dirt_core::{
     AdsParams, BuildReport, CoreError, Hit, Ray, RayStats, TraceReport, Tracer, Traversal,
@@ -45,6 +46,9 @@ pub struct DirtCpu {
     seen: Option<Seen>,
     /// The traced rays the next choice is made on (watching).
     seen_sample: Option<Vec<Ray>>,
+    /// The triangle boxes of the last build, once its traces have paid for
+    /// them (`trace_fast::BoxCache`).
+    boxes: BoxCache,
 }
 
 /// The rays traced since the last build: the point they all start at, if
@@ -73,6 +77,7 @@ impl DirtCpu {
             origin_given: false,
             seen: None,
             seen_sample: None,
+            boxes: BoxCache::default(),
         }
     }
 
@@ -183,6 +188,15 @@ impl DirtCpu {
         self.ads.as_ref()
     }
 
+    /// Bytes of the triangles' boxes kept beside the last build for its
+    /// traces: 0 until the rays traced on it, from more than one point,
+    /// number one for every 4 (triangle, view) pairs; then 32 bytes a pair
+    /// until the next build. A trace of such rays leaves out a listed
+    /// triangle whose box misses the ray's segment in a tile.
+    pub fn boxes_bytes(&self) -> usize {
+        self.boxes.bytes()
+    }
+
     /// Keeps `ads`, built over `tris`, and reports its build.
     fn keep(
         &mut self,
@@ -197,6 +211,7 @@ impl DirtCpu {
         self.tris.clear();
         self.tris.extend_from_slice(tris);
         self.ads = Some(ads);
+        self.boxes = BoxCache::default();
         report
     }
 }
@@ -205,6 +220,7 @@ impl DirtCpu {
     /// [`Tracer::build`]'s work, on a thread of the pool.
     fn rebuild(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
         self.ads = None;
+        self.boxes = BoxCache::default();
         let mut stages = Vec::new();
         if let Some(o) = self.origin
             && !o.is_finite()
@@ -342,7 +358,15 @@ impl Tracer for DirtCpu {
             tracer: self.name(),
         })?;
         let with_stats = stats.is_some();
-        let origin = trace_into_from(ads, &self.tris, rays, self.traversal, hits, stats);
+        let origin = trace_into_from(
+            ads,
+            &self.tris,
+            rays,
+            self.traversal,
+            hits,
+            stats,
+            Some(&mut self.boxes),
+        );
         if self.auto.is_some() && !self.origin_given && !rays.is_empty() {
             // Watching: do all rays since the last build start at one point?
             self.seen = Some(match self.seen.take() {

@@ -118,8 +118,8 @@ proptest! {
 
 // A single view inside the scene does not see all of it, and the plain stage
 // can hit a triangle outside the view, through the lists of its part
-// inside. The trace without statistics leaves out triangles whose depth
-// range misses the ray's span in a tile; a triangle not inside a single
+// inside. The trace without statistics leaves out triangles whose view-space
+// box misses the ray segment's in a tile; a triangle not inside a single
 // view's frustum must never be left out. This case (found by the proptest
 // above) failed before that rule: a hit at a vertex outside the view.
 #[test]
@@ -225,5 +225,73 @@ proptest! {
                 }
             }
         }
+    }
+}
+
+// `DirtCpu` keeps a build's triangle boxes across its traces: computed in
+// the trace whose rays, with those traced before it from more than one
+// point, number one for every 4 (triangle, view) pairs, not before; rays
+// from one point do not count; a new build drops them. The hits stay the
+// plain stage's throughout.
+#[test]
+fn a_tracers_boxes_are_kept_once_its_traces_pay_and_dropped_by_a_build() {
+    use dirt_core::Tracer;
+    let mut rng = Rng(77);
+    let tris = scene(90, &mut rng);
+    let p = AdsParams {
+        views: ViewsKind::Cube,
+        resolution: 16,
+        buckets: 4,
+        ..AdsParams::default()
+    };
+    let mut t = dirt_cpu::DirtCpu::new(p, Traversal::Linear);
+    t.build(&tris).expect("build");
+    let ads = Ads::build(&tris, &p).expect("the same structure");
+    let pairs = tris.len() * ads.views.slots();
+    let need = pairs.div_ceil(4);
+    let traced = |t: &mut dirt_cpu::DirtCpu, rs: &[Ray]| {
+        // The plain stage over the first build.
+        let hits = t.trace(rs).expect("trace");
+        let (want, _) = plain(&ads, &tris, rs, Traversal::Linear);
+        for (k, (h, w)) in hits.iter().zip(&want).enumerate() {
+            assert_eq!(h.bits(), w.bits(), "ray {k} {:?}", rs[k]);
+        }
+    };
+    // From one point: never counted, however many.
+    let o = Vec3::new(0.05, 0.1, -0.02);
+    let one_point: Vec<Ray> = rays(2 * need, &tris, &mut rng)
+        .iter()
+        .map(|r| Ray::new(o, Vec3::from_array(r.dir), 0.0, f32::INFINITY))
+        .collect();
+    traced(&mut t, &one_point);
+    assert_eq!(t.boxes_bytes(), 0, "rays from one point");
+    // From many points: a third of the rays needed a trace, then the rest.
+    let third = need / 3;
+    let many = rays(need, &tris, &mut rng);
+    traced(&mut t, &many[..third]);
+    traced(&mut t, &many[third..2 * third]);
+    assert_eq!(t.boxes_bytes(), 0, "{} of {need} rays", 2 * third);
+    traced(&mut t, &many[2 * third..]);
+    assert_eq!(t.boxes_bytes(), pairs * 32, "{need} rays pay");
+    traced(&mut t, &many[..third]);
+    assert_eq!(t.boxes_bytes(), pairs * 32, "kept");
+    // A build over other triangles: their own boxes, once paid again.
+    let moved: Vec<Triangle> = tris
+        .iter()
+        .map(|t| {
+            let s = |k: usize| t.vertex(k) * 0.9 + Vec3::new(0.05, -0.03, 0.02);
+            Triangle::new(s(0), s(1), s(2))
+        })
+        .collect();
+    t.build(&moved).expect("rebuild");
+    assert_eq!(t.boxes_bytes(), 0, "dropped by the build");
+    let ads = Ads::build(&moved, &p).expect("the same structure");
+    for (batch, kept) in [(&many[..third], 0), (&many[third..], pairs * 32)] {
+        let hits = t.trace(batch).expect("trace");
+        let (want, _) = plain(&ads, &moved, batch, Traversal::Linear);
+        for (k, (h, w)) in hits.iter().zip(&want).enumerate() {
+            assert_eq!(h.bits(), w.bits(), "moved, ray {k} {:?}", batch[k]);
+        }
+        assert_eq!(t.boxes_bytes(), kept);
     }
 }
