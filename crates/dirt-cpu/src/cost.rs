@@ -94,6 +94,18 @@ impl CostModel {
     /// 13.0 ns, per triangle and view 57.9, per ray 224, per tile 12.0, per
     /// bucket 8.8, per test 2.9, per list 2.5): the milliseconds these
     /// constants predict are 1.3× to 1.9× today's, the ranking the same.
+    ///
+    /// Measured again after the trace left out listed triangles whose
+    /// view-space box misses the ray's segment (the same sweep): these
+    /// constants rank the measurements with 0.78 (trace per ray), 0.87
+    /// (build), and 0.84, 0.83, 0.80 for whole frames; a fit ranks them with
+    /// 0.85, 0.87; 0.88, 0.87, 0.85 (per test 0.72 ns, per tile 7.3, per
+    /// bucket 11.7, per ray 196, per node 6.9, per triangle and view 56.3,
+    /// per list 2.4). Its choices were slower where it matters: the
+    /// deforming grid's frames (r64 B8 for 5 000 rays, 4.21 ms a frame
+    /// against 2.98 at r128 B2; r128 B1 for 100 000, 12.8 against 10.1 at
+    /// r256 B1) and foliage's 25 000 rays (single r64 B8, whose trace is 20%
+    /// slower than that of ortho2 r32 B8, for 1 ms less build). These stay.
     pub const CALIBRATED: CostModel = CostModel {
         ns_per_node: 24.53,
         ns_per_list: 2.418,
