@@ -342,11 +342,11 @@ const TILES_PER_RAY: usize = 8;
 
 /// (Triangle, view) pairs whose boxes one ray of a batch pays for
 /// ([`Scene::prepare_for`]): a box costs a few nanoseconds, a test left
-/// out about 6 (the eval's cornell rays leave out 10 a ray with depths
-/// alone, 15 with the box). Not more rays: on the 33,794 triangles of
-/// `spheres`, boxes for batches of 5,000 rays (one for every 7 pairs) left
-/// out 63% of the listed tests but made the trace 23% slower, as a box
-/// read from memory costs what the test it saves does.
+/// out about 6 (the eval's cornell rays: 39% of the listed tests left out
+/// with depths alone, 73% with the box). Not fewer: boxes for every batch
+/// of 5,000 rays (1 thread, the eval's five kinds) made `2CylinderEngine`'s
+/// trace 13-22% slower (121,496 triangles, 2.8 ms of boxes a call) and
+/// `spheres`' no faster (33,794; 890-934 against 906-933 ns a ray).
 const PAIRS_PER_RAY: usize = 4;
 
 /// Per view slot, then triangle (`slot · tris.len() + id`): the triangle's
