@@ -211,7 +211,6 @@ impl DirtCpu {
         self.tris.clear();
         self.tris.extend_from_slice(tris);
         self.ads = Some(ads);
-        self.boxes = BoxCache::default();
         report
     }
 }
@@ -219,6 +218,7 @@ impl DirtCpu {
 impl DirtCpu {
     /// [`Tracer::build`]'s work, on a thread of the pool.
     fn rebuild(&mut self, tris: &[Triangle]) -> Result<BuildReport, CoreError> {
+        // The old structure's boxes go with it, whether this build succeeds or not.
         self.ads = None;
         self.boxes = BoxCache::default();
         let mut stages = Vec::new();
