@@ -360,8 +360,9 @@ pub struct ProcessRow {
     pub differ: usize,
 }
 
-/// The cost model's choice (`dirt_cpu::cost::auto`) for one scene: what the
-/// library's default and the command line build for a frame of these rays.
+/// The cost model's one-off choice (`dirt_cpu::cost::auto`) for one scene:
+/// what the command line builds for a frame of these rays (the library's
+/// `DirtCpu::auto` searches further, `cost::KEPT_BUDGET`).
 #[derive(Clone, Debug, Serialize)]
 pub struct ChoiceRow {
     pub scene: String,

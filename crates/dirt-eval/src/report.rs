@@ -251,7 +251,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     let _ = writeln!(s, "## Headline: DIRT against the peers\n");
     let _ = writeln!(
         s,
-        "DIRT on the CPU at its default: the setting the cost model (`dirt_cpu::cost::auto`, what the library's `DirtCpu::auto` and the command line build) chooses for a frame of all the scene's rays of the run; `choose ms` is the time that choice took (candidate builds and sample traces, paid once per scene, not in the build column). Ratios are dirt / peer: \
+        "DIRT on the CPU at its default: the setting the cost model's one-off choice (`dirt_cpu::cost::auto`, as the command line chooses: candidate builds within a quarter of the best predicted frame) makes for a frame of all the scene's rays of the run, measured on a stride of them; the library's `DirtCpu::auto`, which keeps its choice for later frames, searches on (`cost::KEPT_BUDGET`, four frames) from rays it generates or is given, and may choose otherwise. `choose ms` is the time the one-off choice took (candidate builds and sample traces, paid once per scene, not in the build column). Ratios are dirt / peer: \
          above 1 means DIRT is slower (build, trace time) — trace ratios are of time over all ray types. The fixed setting ({DEFAULT}) follows in the next table.\n"
     );
     let peers: Vec<String> = {
