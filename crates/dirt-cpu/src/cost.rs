@@ -106,6 +106,18 @@ impl CostModel {
     /// against 2.98 at r128 B2; r128 B1 for 100 000, 12.8 against 10.1 at
     /// r256 B1) and foliage's 25 000 rays (single r64 B8, whose trace is 20%
     /// slower than that of ortho2 r32 B8, for 1 ms less build). These stay.
+    ///
+    /// Tried and not kept: counting the fast path's work instead of the plain
+    /// stage's statistics (triangles tested after the apex look, the boxes
+    /// and the mailbox; Hi-Z cells expanded counted as tiles; each for a
+    /// batch of the frame's size). A fit to it ranked the same sweep better
+    /// (0.926 trace per ray; 0.912, 0.924, 0.921 for frames), but chose
+    /// slower structures for the deforming grid: r128 B4 and r256 B2 for
+    /// frames of 5,000 and 100,000 rays, 6% and 11-13% slower than the
+    /// r128 B2 and r256 B1 chosen now (alternated runs). With the grid's
+    /// camera rays in the sweep, a test weighed 3.0 ns instead of 11.4, and
+    /// the search chose single r32 B1 for foliage's headline rays, whose
+    /// trace is 2.3x slower than that of ortho2 r32 B8.
     pub const CALIBRATED: CostModel = CostModel {
         ns_per_node: 24.53,
         ns_per_list: 2.418,
