@@ -144,7 +144,7 @@ use crate::Ads;
 use crate::intersect_lanes::{LANES, intersect_closest_lanes};
 use dirt_core::{RayStats, Traversal, ViewsKind};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
-use dirt_math::clip::{HalfSpace, Interval, ray_depth, view_frustum};
+use dirt_math::clip::{HalfSpace, Interval, ray_depth, ray_point, view_frustum};
 use dirt_math::dda::{child_order, dilation, hiz_width};
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::num::{floor_index, fmax, fmin};
@@ -777,16 +777,14 @@ fn index_range(a: f32, b: f32, d: f32, tiles: u32) -> Option<(u32, u32)> {
 }
 
 /// The box of the ray's segment over an interval, rounded outward by its
-/// `eps`; its depth is [`depth_span`]'s, bit for bit ([`ray_depth`]'s
-/// operations).
+/// `eps`: in x and y from its ends ([`ray_point`]), in depth `depth`, the
+/// span [`depth_span`] gave for the same interval.
 #[inline]
-fn span_box(vr: &ViewRay, iv: Interval) -> ViewBox {
-    let a: [f32; 3] = from_fn(|c| vr.o[c] + iv.t0 * vr.d[c]);
-    let b: [f32; 3] = from_fn(|c| vr.o[c] + iv.t1 * vr.d[c]);
-    ViewBox::new(
-        from_fn(|c| fmin(a[c], b[c]) - vr.eps),
-        from_fn(|c| fmax(a[c], b[c]) + vr.eps),
-    )
+fn span_box(vr: &ViewRay, iv: Interval, (lo, hi): (f32, f32)) -> ViewBox {
+    let (a, b) = (ray_point(vr, iv.t0), ray_point(vr, iv.t1));
+    let side = |c: usize| (fmin(a[c], b[c]) - vr.eps, fmax(a[c], b[c]) + vr.eps);
+    let (x, y) = (side(0), side(1));
+    ViewBox::new([x.0, y.0, lo], [x.1, y.1, hi])
 }
 
 /// The ray's depth span over an interval, rounded outward by its `eps`.
@@ -1675,7 +1673,7 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
             return;
         }
         let boxes = if STATS { None } else { self.sc.boxes(v) };
-        let boxes = boxes.map(|b| (b, span_box(vr, iv)));
+        let boxes = boxes.map(|b| (b, span_box(vr, iv, (lo, hi))));
         self.buckets(vr, tile, (zmin, zmax), (lo, hi), boxes);
     }
 
