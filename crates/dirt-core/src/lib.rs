@@ -33,5 +33,5 @@ pub use params::{AdsParams, Traversal};
 pub use tracer::{BuildReport, RAYS_PER_TASK, TraceReport, Tracer, check_lengths, trace_each};
 pub use views::{
     LeftOutReason, LeftOutView, bounds_of, first_non_finite, left_out_views, views_for,
-    views_for_all, views_for_bounded, views_reached,
+    views_for_all, views_for_bounded, views_over, views_reached,
 };

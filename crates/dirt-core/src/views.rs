@@ -199,19 +199,27 @@ fn views_for_all_bounded(
             max: Vec3::splat(1.0),
         };
     }
+    Ok(views_over(params, &bounds))
+}
+
+/// The views `params` place over `bounds` (not empty), none left out yet:
+/// [`views_for_all`] without its checks of the parameters and the
+/// triangles, for a caller that has made them (the cost model, which looks
+/// at where the triangles fall in a placement's views before building it).
+pub fn views_over(params: &AdsParams, bounds: &Aabb) -> ViewSet {
     let tiles = params.tiles();
-    Ok(match params.views {
-        ViewsKind::Cube => ViewSet::cube(params.center.unwrap_or(bounds.center()), &bounds, tiles),
-        ViewsKind::Single => ViewSet::single(params.center, &bounds, tiles),
+    match params.views {
+        ViewsKind::Cube => ViewSet::cube(params.center.unwrap_or(bounds.center()), bounds, tiles),
+        ViewsKind::Single => ViewSet::single(params.center, bounds, tiles),
         ViewsKind::Ortho | ViewsKind::OrthoSplit => {
             let axis = params
                 .axis
                 .unwrap_or_else(|| Axis::thinnest(bounds.extent()));
             let cut = (params.views == ViewsKind::OrthoSplit)
                 .then(|| params.center.unwrap_or(bounds.center())[axis.index()]);
-            ViewSet::ortho(axis, cut, &bounds, tiles)
+            ViewSet::ortho(axis, cut, bounds, tiles)
         }
-    })
+    }
 }
 
 #[cfg(test)]

@@ -633,9 +633,9 @@ pub const AUTO_BUDGET: f64 = 0.25;
 /// 3.39-3.42 ms), for a few builds once.
 pub const KEPT_BUDGET: f64 = 4.0;
 
-/// The first resolution [`auto`] tries for a view kind: the power of two
-/// nearest `sqrt(triangles / views)`, so that a triangle covers about one
-/// tile, among the candidates' resolutions.
+/// The first resolution [`auto`] tries for a perspective view kind: the
+/// power of two nearest `sqrt(triangles / views)` among the candidates'
+/// resolutions, so that a triangle covers about one tile.
 fn first_guess(tris: usize, views: ViewsKind, resolutions: &[u32]) -> u32 {
     let per_view = tris as f64 / views.view_count() as f64;
     let want = per_view.max(1.0).sqrt().log2();
@@ -649,13 +649,128 @@ fn first_guess(tris: usize, views: ViewsKind, resolutions: &[u32]) -> u32 {
         .unwrap_or(AdsParams::default().resolution)
 }
 
+/// The triangles' mean extents along the world axes and the mean products
+/// of two of them: the size of a triangle's bounding rectangle in an
+/// orthographic view ([`Extents::area`]), known without a build.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Extents {
+    /// Mean extent along x, y and z.
+    pub mean: [f64; 3],
+    /// Mean product of the extents along the two axes other than x, y and z:
+    /// `[y·z, x·z, x·y]`.
+    pub cross: [f64; 3],
+}
+
+impl Extents {
+    /// Of `tris`, skipping triangles with a coordinate that is not finite;
+    /// `None` where none is left. Sums are made per chunk and added in
+    /// order, so the result does not depend on the threads.
+    pub fn of(tris: &[Triangle]) -> Option<Extents> {
+        use rayon::prelude::*;
+        let part = |chunk: &[Triangle]| {
+            let (mut sum, mut n) = ([0.0f64; 6], 0usize);
+            for t in chunk {
+                // min and max pass NaN over: test the coordinates themselves.
+                if t.v.iter().flatten().all(|x| x.is_finite()) {
+                    let [a, b, c] = [t.vertex(0), t.vertex(1), t.vertex(2)];
+                    let e = (a.max(b).max(c) - a.min(b).min(c))
+                        .to_array()
+                        .map(f64::from);
+                    let terms = [e[0], e[1], e[2], e[1] * e[2], e[0] * e[2], e[0] * e[1]];
+                    for (s, x) in sum.iter_mut().zip(terms) {
+                        *s += x;
+                    }
+                    n += 1;
+                }
+            }
+            (sum, n)
+        };
+        let parts: Vec<([f64; 6], usize)> = tris.par_chunks(4096).map(part).collect();
+        let (mut sum, mut n) = ([0.0f64; 6], 0usize);
+        for (s, k) in parts {
+            for (a, b) in sum.iter_mut().zip(s) {
+                *a += b;
+            }
+            n += k;
+        }
+        (n > 0).then(|| {
+            let m = |k: usize| sum[k] / n as f64;
+            Extents {
+                mean: [m(0), m(1), m(2)],
+                cross: [m(3), m(4), m(5)],
+            }
+        })
+    }
+
+    /// The mean area of a triangle's bounding rectangle in an orthographic
+    /// view looking along `axis` whose image is `2·half` wide, as a share
+    /// of the image's.
+    pub fn area(&self, axis: Axis, half: f32) -> f64 {
+        self.cross[axis.index()] / (2.0 * f64::from(half)).powi(2)
+    }
+}
+
+/// The resolutions [`auto`] tries first for the placement `place` over
+/// `bounds`. For an orthographic one, the two of `resolutions` around the
+/// resolution at which the mean triangle's bounding rectangle is about a
+/// tile (`area · r² = 1`) or, for triangles much smaller than the image's
+/// share of each, about a triangle a tile (`r² = triangles / views`, as
+/// [`first_guess`]): `r = 1 / sqrt(area + views / triangles)`. A ray walks
+/// more tiles as they grow finer and meets more triangles in each as they
+/// grow coarser; past a tile's size a triangle is listed in more tiles,
+/// and a ray meets no fewer of them. The coarser first: it builds faster,
+/// and a large scene's budget builds one candidate. Over every candidate
+/// of the eval's static scenes and its five ray types (2 threads,
+/// `dirt-eval`'s `sweep` example), the one-view orthographic set traced
+/// fastest at r8 on cornell (`r` 15.3; r16 8% slower), r16 on foliage
+/// (15.6) and bunny (30; r32 1% slower), r64 on layers (22.6; r32 5-8%
+/// slower), r128 on spheres (99; r64 2% slower, building in 0.6x the
+/// time) and on 2CylinderEngine (141).
+/// For a perspective placement, whose tiles grow with the depth,
+/// [`first_guess`] alone.
+fn first_guesses_at(
+    sizes: Option<&(Aabb, Extents)>,
+    tris: usize,
+    place: &AdsParams,
+    resolutions: &[u32],
+) -> Vec<u32> {
+    let perspective = || vec![first_guess(tris, place.views, resolutions)];
+    let Some((bounds, e)) =
+        sizes.filter(|(b, _)| place.views.is_ortho() && !b.is_empty() && tris > 0)
+    else {
+        return perspective();
+    };
+    let views = dirt_core::views_over(place, bounds);
+    let axis = place
+        .axis
+        .unwrap_or_else(|| Axis::thinnest(bounds.extent()));
+    let half = views.views.first().map_or(0.0, |v| v.tan);
+    let share = place.views.view_count() as f64 / tris as f64;
+    let want = 1.0 / (e.area(axis, half) + share).sqrt();
+    let mut sorted = resolutions.to_vec();
+    sorted.sort_unstable();
+    let below = sorted.iter().copied().rfind(|&r| f64::from(r) <= want);
+    let above = sorted.iter().copied().find(|&r| f64::from(r) > want);
+    let mut out: Vec<u32> = [below, above].into_iter().flatten().collect();
+    out.dedup();
+    if out.is_empty() {
+        // Only where `want` is not a number.
+        return perspective();
+    }
+    out
+}
+
 /// The cost model's choice of parameters for `rays_per_frame` rays, made
 /// cheaply enough to be a default: a local search over `candidates` instead of
 /// building them all ([`choose`]).
 ///
-/// 1. Per placement (view kind and centre), a first guess: the resolution of
-///    [`first_guess`] with the B nearest 8. Placements are tried in the order
-///    of their estimated frames (one view costs less to build than six).
+/// 1. Per placement (view kind and centre), a first guess with the B nearest
+///    8: for an orthographic placement two, at the resolutions around the
+///    one where its mean triangle is about a tile ([`Extents`], known
+///    without a build), the coarser first; for a perspective one, the
+///    resolution of [`first_guess`]. Placements are tried in the order of
+///    their estimated frames (one view costs less to build than six), the
+///    orthographic first of two alike.
 /// 2. From the best candidate so far, its neighbours (resolution halved or
 ///    doubled, B halved or doubled, same placement) are tried, cheapest estimate
 ///    first; the search moves to a neighbour that beats it and stops when none does.
@@ -791,7 +906,7 @@ pub fn auto_budgeted(
         ranked.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
         Ok(wins)
     };
-    // 1. A first guess per placement, the one with the cheaper estimate first.
+    // 1. The first guesses per placement, the one with the cheaper estimate first.
     let resolutions: Vec<u32> = {
         let mut r: Vec<u32> = candidates.iter().map(|p| p.resolution).collect();
         r.sort_unstable();
@@ -805,18 +920,35 @@ pub fn auto_budgeted(
         }
     }
     let mut guesses: Vec<usize> = Vec::new();
+    // What the orthographic guesses look at, where there are some.
+    let sizes = places
+        .iter()
+        .any(|p| p.views.is_ortho())
+        .then(|| Some((dirt_core::bounds_of(tris), Extents::of(tris)?)))
+        .flatten();
     for place in &places {
-        let r0 = first_guess(tris.len(), place.views, &resolutions);
-        let guess = (0..candidates.len())
-            .filter(|&k| same_place(&candidates[k], place))
-            .min_by_key(|&k| {
-                let p = &candidates[k];
-                (p.resolution.abs_diff(r0), p.buckets.abs_diff(8), p.buckets)
-            });
-        guesses.extend(guess);
+        for r0 in first_guesses_at(sizes.as_ref(), tris.len(), place, &resolutions) {
+            let guess = (0..candidates.len())
+                .filter(|&k| same_place(&candidates[k], place))
+                .min_by_key(|&k| {
+                    let p = &candidates[k];
+                    (p.resolution.abs_diff(r0), p.buckets.abs_diff(8), p.buckets)
+                });
+            guesses.extend(guess.filter(|k| !guesses.contains(k)));
+        }
     }
-    guesses
-        .sort_by(|&a, &b| estimate(&candidates[a], &[]).total_cmp(&estimate(&candidates[b], &[])));
+    // Of two placements alike in views, the orthographic first (over every
+    // candidate of the eval's six static scenes, the one-view orthographic
+    // set traced within 2% of the fastest candidate, the single view 14-88%
+    // behind it: `dirt-eval`'s `sweep` example), and of one placement's
+    // guesses the coarser: a large scene's budget builds one guess. The
+    // sort is stable.
+    guesses.sort_by(|&a, &b| {
+        let (p, q) = (&candidates[a], &candidates[b]);
+        estimate(p, &[])
+            .total_cmp(&estimate(q, &[]))
+            .then(q.views.is_ortho().cmp(&p.views.is_ortho()))
+    });
     for &k in &guesses {
         attempt(
             k,
@@ -1075,6 +1207,108 @@ mod tests {
                 .expect("candidate")
         };
         assert!(nodes(64, 16) >= nodes(64, 4));
+    }
+
+    #[test]
+    fn extents_are_the_triangles_mean_sizes() {
+        // Extents (1, 2, 0) and (3, 0, 4); one with a NaN is left out.
+        let a = Triangle::new(
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+        );
+        let b = Triangle::new(
+            Vec3::ZERO,
+            Vec3::new(3.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 4.0),
+        );
+        let nan = Triangle::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ZERO, Vec3::ONE);
+        let e = Extents::of(&[a, nan, b]).expect("two finite triangles");
+        assert_eq!(e.mean, [2.0, 1.0, 2.0]);
+        // y·z: (2·0 + 0·4) / 2; x·z: (1·0 + 3·4) / 2; x·y: (1·2 + 3·0) / 2.
+        assert_eq!(e.cross, [0.0, 6.0, 1.0]);
+        // Looking along z at an image 4 wide: x·y over 16.
+        assert_eq!(e.area(Axis::Z, 2.0), 1.0 / 16.0);
+        assert!(Extents::of(&[nan]).is_none());
+        assert!(Extents::of(&[]).is_none());
+        // Sums per chunk, added in order: the same bits on any number of threads.
+        let many: Vec<Triangle> = sample_rays(&stack(8), 20_000, 3)
+            .iter()
+            .map(|r| {
+                let o = Vec3::from(r.origin);
+                Triangle::new(o, o + Vec3::from(r.dir) * 0.1, o + Vec3::X * 0.01)
+            })
+            .collect();
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| Extents::of(&many))
+        };
+        assert_eq!(on(1), on(3));
+    }
+
+    /// `n × n` small squares' triangles (`size` a side) over the unit
+    /// square of the xy plane: the bounds' thinnest axis is z.
+    fn tiles_of(n: usize, size: f32) -> Vec<Triangle> {
+        let mut out = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let p = Vec3::new(i as f32 / n as f32, j as f32 / n as f32, 0.0);
+                out.push(Triangle::new(p, p + Vec3::X * size, p + Vec3::Y * size));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn an_orthographic_guess_is_about_a_tile_a_triangle() {
+        let res = [8, 16, 32, 64, 128, 256];
+        let ortho = AdsParams {
+            views: ViewsKind::Ortho,
+            ..AdsParams::default()
+        };
+        let guesses = |tris: &[Triangle], place: &AdsParams| {
+            let sizes = Extents::of(tris).map(|e| (Aabb::of_triangles(tris), e));
+            first_guesses_at(sizes.as_ref(), tris.len(), place, &res)
+        };
+        // 2,025 specks: about a triangle a tile at sqrt(2025) = 45, between r32 and r64.
+        let specks = tiles_of(45, 1e-4);
+        assert_eq!(specks.len(), 2025);
+        assert_eq!(guesses(&specks, &ortho), vec![32, 64]);
+        // 64 triangles, each about a quarter of the image wide: a tile each
+        // near r4, below every candidate, so the coarsest alone.
+        let large = tiles_of(8, 0.25);
+        assert_eq!(guesses(&large, &ortho), vec![8]);
+        // A perspective placement keeps sqrt(triangles / views).
+        let single = AdsParams {
+            views: ViewsKind::Single,
+            ..AdsParams::default()
+        };
+        assert_eq!(
+            guesses(&specks, &single),
+            vec![first_guess(2025, ViewsKind::Single, &res)]
+        );
+        // The search builds the orthographic guess first: with one frame's
+        // budget for a few rays, the coarser one is built.
+        let sample = sample_rays(&specks, 200, 5);
+        let a = auto(
+            &specks,
+            &sample,
+            10,
+            Traversal::HiZ,
+            &CostModel::CALIBRATED,
+            &candidates_all(&AdsParams::default(), &specks),
+        )
+        .expect("auto");
+        assert!(
+            a.ranked.iter().any(|c| c.params.views == ViewsKind::Ortho
+                && c.params.resolution == 32
+                && c.params.buckets == 8),
+            "{:?}",
+            a.ranked.iter().map(|c| c.params).collect::<Vec<_>>()
+        );
     }
 
     fn stack(n: usize) -> Vec<Triangle> {
