@@ -2,7 +2,7 @@
 
 use crate::CoreError;
 use dirt_math::view::Axis;
-use dirt_math::{Vec3, ViewsKind};
+use dirt_math::{Aabb, Vec3, ViewsKind};
 use std::fmt;
 
 /// How a ray walks the tiles it crosses.
@@ -73,6 +73,12 @@ impl AdsParams {
     /// Tiles per side of each view.
     pub fn tiles(&self) -> u32 {
         self.resolution / self.tile.max(1)
+    }
+
+    /// The axis orthographic views look along over `bounds`: `axis`, else
+    /// the bounds' thinnest.
+    pub fn ortho_axis(&self, bounds: &Aabb) -> Axis {
+        self.axis.unwrap_or_else(|| Axis::thinnest(bounds.extent()))
     }
 
     /// Checks the parameters before any work is done.

@@ -3,7 +3,6 @@
 
 use crate::{AdsParams, CoreError};
 use dirt_math::clip::{clip_triangle_to_view, polygon_tile_range};
-use dirt_math::view::Axis;
 use dirt_math::{Aabb, Triangle, Vec3, View, ViewSet, ViewsKind};
 
 /// Checks `params` and `tris` and makes the view set both backends build over.
@@ -212,9 +211,7 @@ pub fn views_over(params: &AdsParams, bounds: &Aabb) -> ViewSet {
         ViewsKind::Cube => ViewSet::cube(params.center.unwrap_or(bounds.center()), bounds, tiles),
         ViewsKind::Single => ViewSet::single(params.center, bounds, tiles),
         ViewsKind::Ortho | ViewsKind::OrthoSplit => {
-            let axis = params
-                .axis
-                .unwrap_or_else(|| Axis::thinnest(bounds.extent()));
+            let axis = params.ortho_axis(bounds);
             let cut = (params.views == ViewsKind::OrthoSplit)
                 .then(|| params.center.unwrap_or(bounds.center())[axis.index()]);
             ViewSet::ortho(axis, cut, bounds, tiles)

@@ -356,7 +356,7 @@ pub fn candidates_all(base: &AdsParams, tris: &[Triangle]) -> Vec<AdsParams> {
         return out;
     }
     let bounds = dirt_core::bounds_of(tris);
-    let axis = base.axis.unwrap_or_else(|| Axis::thinnest(bounds.extent()));
+    let axis = base.ortho_axis(&bounds);
     let ortho = |views, center| AdsParams {
         views,
         center,
@@ -741,9 +741,7 @@ fn first_guesses_at(
         return perspective();
     };
     let views = dirt_core::views_over(place, bounds);
-    let axis = place
-        .axis
-        .unwrap_or_else(|| Axis::thinnest(bounds.extent()));
+    let axis = place.ortho_axis(bounds);
     let half = views.views.first().map_or(0.0, |v| v.tan);
     let share = place.views.view_count() as f64 / tris as f64;
     let want = 1.0 / (e.area(axis, half) + share).sqrt();
