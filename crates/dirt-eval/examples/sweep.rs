@@ -32,7 +32,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         dirt_cpu::trace(&reference, &tris, r, Traversal::Linear)
     })?;
     let all: Vec<_> = rays.iter().flat_map(|(_, r)| r.iter().copied()).collect();
-    let sample = dirt_cpu::cost::stride_sample(&all, 2000);
+    // The headline's sample, so that the choice marked is the headline's.
+    let sample = dirt_cpu::cost::stride_sample(&all, dirt_eval::harness::CHOICE_SAMPLE);
     let model = CostModel::CALIBRATED;
     let candidates = dirt_cpu::cost::candidates_all(&AdsParams::default(), &tris);
     let chosen = dirt_cpu::cost::auto(

@@ -379,7 +379,7 @@ pub struct ChoiceRow {
 }
 
 /// Rays of a scene's run the cost model measures its candidates with.
-const CHOICE_SAMPLE: usize = 1000;
+pub const CHOICE_SAMPLE: usize = 1000;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct SceneInfo {
