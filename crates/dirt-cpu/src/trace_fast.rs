@@ -739,13 +739,20 @@ fn cuts_of<const N: usize>(f0: [f32; N], f1: [f32; N]) -> ([f32; N], [f32; N]) {
 #[inline(always)]
 fn tile_xy2(v: &View, vr: &ViewRay, ta: f32, tb: f32) -> [f32; 4] {
     let (o, d) = (vr.o, vr.d);
-    let za = v.w(o[2] + ta * d[2]);
-    let zb = v.w(o[2] + tb * d[2]);
     let oo = [o[0], o[1], o[0], o[1]];
     let dd = [d[0], d[1], d[0], d[1]];
     let tt = [ta, ta, tb, tb];
-    let zz = [za, za, zb, zb];
-    from_fn(|k| ((oo[k] + tt[k] * dd[k]) / zz[k] + v.tan) / v.step)
+    let p: [f32; 4] = from_fn(|k| oo[k] + tt[k] * dd[k]);
+    // An orthographic view's `w` is 1: the division by it is left out.
+    let s = if v.ortho {
+        p
+    } else {
+        let za = v.w(o[2] + ta * d[2]);
+        let zb = v.w(o[2] + tb * d[2]);
+        let zz = [za, za, zb, zb];
+        from_fn(|k| p[k] / zz[k])
+    };
+    from_fn(|k| (s[k] + v.tan) / v.step)
 }
 
 /// The terms a tile boundary `s` multiplies in a side's value `p[axis] − s·w`
@@ -1419,12 +1426,19 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
                 t0 = from_fn(|q| if lo[q] > t0[q] { lo[q] } else { t0[q] });
                 t1 = from_fn(|q| if hi[q] < t1[q] { hi[q] } else { t1[q] });
             }
-            // The minor coordinate of `tile_xy` at both ends of each band.
+            // The minor coordinate of `tile_xy` at both ends of each band,
+            // each step over the lanes at once (one vector division, not
+            // four); an orthographic view's `w` is 1, where the division by
+            // it is left out (`x / 1` is `x`).
             let minor_at = |t: [f32; BAND_LANES]| -> [f32; BAND_LANES] {
-                from_fn(|q| {
-                    let z = v.w(o[2] + t[q] * d[2]);
-                    ((o[minor] + t[q] * d[minor]) / z + tan) / step
-                })
+                let p: [f32; BAND_LANES] = from_fn(|q| o[minor] + t[q] * d[minor]);
+                let s = if v.ortho {
+                    p
+                } else {
+                    let z: [f32; BAND_LANES] = from_fn(|q| v.w(o[2] + t[q] * d[2]));
+                    from_fn(|q| p[q] / z[q])
+                };
+                from_fn(|q| (s[q] + tan) / step)
             };
             let (pm, qm) = (minor_at(t0), minor_at(t1));
             for q in 0..count as usize {

@@ -25,10 +25,18 @@ pub struct RayShear {
 
 impl RayShear {
     pub fn new(ray: &Ray) -> Self {
-        let d = ray.dir;
-        let ax = d[0].abs();
-        let ay = d[1].abs();
-        let az = d[2].abs();
+        let [dx, dy, dz] = ray.dir;
+        // Components by axis through a select, not by indexing a copy of
+        // `dir`: the copy went through the stack, and reading it back as
+        // wider words than it was written stalled each ray's set-up.
+        let d = |k: usize| match k {
+            0 => dx,
+            1 => dy,
+            _ => dz,
+        };
+        let ax = dx.abs();
+        let ay = dy.abs();
+        let az = dz.abs();
         // Largest component; ties resolved towards x, then y (fixed, so WGSL can follow).
         let kz = if ax >= ay && ax >= az {
             0
@@ -40,16 +48,16 @@ impl RayShear {
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         // Keep the winding: swap when the major component is negative.
-        if d[kz] < 0.0 {
+        if d(kz) < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
         Self {
             kx,
             ky,
             kz,
-            sx: d[kx] / d[kz],
-            sy: d[ky] / d[kz],
-            sz: 1.0 / d[kz],
+            sx: d(kx) / d(kz),
+            sy: d(ky) / d(kz),
+            sz: 1.0 / d(kz),
         }
     }
 }
