@@ -246,6 +246,18 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
     }
     assert!(choices > 0, "no dynamic choice noted: {md}");
     assert!(md.contains("| DIRT setting | choose ms |"), "{md}");
+    // The goals, with what the run measured for those it has figures of.
+    assert!(md.contains("## Speed goals"), "{md}");
+    for row in [
+        "| deforming grid frame (2048 triangles, rebuild + ",
+        "| render cornell ",
+    ] {
+        assert!(md.contains(row), "no goal row {row}: {md}");
+    }
+    assert_eq!(
+        md.contains("| trace DIRT/Embree, cornell "),
+        cfg!(feature = "embree")
+    );
     assert!(md.contains("The fixed setting cube r128 B8 S1"), "{md}");
     assert!(
         md.contains("## Leaving out what a scene does not need"),

@@ -43,6 +43,12 @@ pub struct RenderConfig {
     pub approx: Vec<ApproxPoint>,
 }
 
+/// The render's row of DIRT, the library's default (`DirtCpu::auto`).
+pub const DIRT_TRACER: &str = "dirt-cpu (the cost model's choice)";
+
+/// The render's row of the renderer's own BVH, which made the reference.
+pub const REFERENCE_TRACER: &str = "obvhs bvh2 (renderer reference)";
+
 /// One render.
 #[derive(Clone, Debug, Serialize)]
 pub struct RenderRow {
@@ -170,10 +176,10 @@ pub fn run(cfg: &RenderConfig) -> Result<(Vec<RenderRow>, RenderReference, Image
                 0 => {
                     let mut dirt = DirtCpu::auto(None, run_settings.max_rays());
                     dirt.build(&scene.triangles).map_err(render_err)?;
-                    ("dirt-cpu (the cost model's choice)".into(), Box::new(dirt))
+                    (DIRT_TRACER.into(), Box::new(dirt))
                 }
                 1 => (
-                    "obvhs bvh2 (renderer reference)".into(),
+                    REFERENCE_TRACER.into(),
                     Box::new(Reference::new(&scene.triangles)),
                 ),
                 k => {

@@ -247,6 +247,8 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         crate::peers::GRID
     );
 
+    goals_table(&mut s, res);
+
     // Headline ratios.
     let _ = writeln!(s, "## Headline: DIRT against the peers\n");
     let _ = writeln!(
@@ -730,16 +732,179 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
 /// model's choice of the headline, so the fixed grid stays reported.
 /// Whole `dirt trace` processes on the large scene, per backend: the
 /// median wall time of its runs and the ratio DIRT / backend.
+/// DIRT's speed goals beside the ratios this run measured, each from the
+/// tables below.
+const TRACE_GOAL: f64 = 3.0;
+const BUILD_GOAL: f64 = 1.0;
+/// Of the deforming grid's frame, DIRT / the best peer: with a few thousand
+/// rays a frame (the build's share is large) and with 100,000.
+const FRAME_GOAL_FEW: f64 = 0.67;
+const FRAME_GOAL_MANY: f64 = 1.0;
+
+/// Rays a frame up to which [`FRAME_GOAL_FEW`] applies (the run's 5,000).
+const FEW_RAYS: usize = 10_000;
+const RENDER_GOAL: f64 = 2.0;
+const PROCESS_GOAL: f64 = 1.5;
+
+/// The scene whose build has no goal, only a figure: 512 stacked triangles
+/// that each cover the whole view, which Embree builds in a tenth of a
+/// millisecond.
+const BUILD_REPORTED_ONLY: &str = "layers";
+
+/// The median of a list of runs, if any.
+fn median_of(runs: &[f64]) -> Option<f64> {
+    let mut v = runs.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    (n > 0).then(|| (v[(n - 1) / 2] + v[n / 2]) / 2.0)
+}
+
+/// "## Speed goals": every goal, the ratio this run measured for it, and
+/// whether it is met. Ratios are DIRT / peer (above 1: DIRT slower). Rows
+/// whose figures the run lacks (a peer unavailable, a part skipped) are
+/// left out.
+fn goals_table(s: &mut String, res: &EvalResults) {
+    let mut rows: Vec<(String, String, String, &str)> = Vec::new();
+    let met = |x: f64, goal: f64| if x <= goal { "yes" } else { "no" };
+    for sc in &res.scenes {
+        let setting = chosen_setting(res, &sc.name);
+        let (lin, _) = trace_totals(res, &sc.name, "dirt-cpu", setting, "linear");
+        let (hiz, _) = trace_totals(res, &sc.name, "dirt-cpu", setting, "hiz");
+        let (emb, _) = trace_totals(res, &sc.name, "embree", "", "");
+        if emb > 0.0 && lin > 0.0 && hiz > 0.0 {
+            let (l, h) = (lin / emb, hiz / emb);
+            rows.push((
+                format!("trace DIRT/Embree, {} ({setting}; linear / hiz)", sc.name),
+                format!("≤ {TRACE_GOAL}"),
+                format!("{} / {}", f(l), f(h)),
+                met(l.min(h), TRACE_GOAL),
+            ));
+        }
+        let db = build_ms(res, &sc.name, "dirt-cpu", setting);
+        if let (Some(d), Some(e)) = (db, build_ms(res, &sc.name, "embree", "")) {
+            let reported = sc.name == BUILD_REPORTED_ONLY;
+            rows.push((
+                format!("build DIRT/Embree, {}", sc.name),
+                if reported {
+                    "reported".into()
+                } else {
+                    format!("≤ {BUILD_GOAL}")
+                },
+                f(d / e),
+                if reported {
+                    "–"
+                } else {
+                    met(d / e, BUILD_GOAL)
+                },
+            ));
+        }
+    }
+    let mut counts: Vec<usize> = res
+        .dynamic
+        .iter()
+        .filter(|r| r.scene == crate::dynamic::WAVE)
+        .map(|r| r.rays)
+        .collect();
+    counts.sort_unstable();
+    counts.dedup();
+    for rays in counts {
+        let goal = if rays <= FEW_RAYS {
+            FRAME_GOAL_FEW
+        } else {
+            FRAME_GOAL_MANY
+        };
+        let of: Vec<crate::dynamic::DynamicRow> = res
+            .dynamic
+            .iter()
+            .filter(|r| r.scene == crate::dynamic::WAVE && r.rays == rays)
+            .cloned()
+            .collect();
+        let tris = of.first().map_or(0, |r| r.triangles);
+        let dirt = medians(&of, "dirt-cpu").map(|m| m.2);
+        let mut peers: Vec<&str> = of
+            .iter()
+            .map(|r| r.backend.as_str())
+            .filter(|b| !b.starts_with("dirt"))
+            .collect();
+        peers.sort_unstable();
+        peers.dedup();
+        let best = peers
+            .iter()
+            .filter_map(|b| medians(&of, b).map(|m| (m.2, *b)))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let (Some(d), Some((p, peer))) = (dirt, best) {
+            rows.push((
+                format!(
+                    "deforming grid frame ({tris} triangles, rebuild + {rays} rays), DIRT/the best peer ({peer})"
+                ),
+                format!("≤ {goal}"),
+                f(d / p),
+                met(d / p, goal),
+            ));
+        }
+    }
+    let at_most_spp = |tracer: &str| {
+        res.renders
+            .iter()
+            .filter(|r| r.tracer == tracer)
+            .max_by_key(|r| r.spp)
+    };
+    if let (Some(d), Some(r)) = (
+        at_most_spp(crate::renders::DIRT_TRACER),
+        at_most_spp(crate::renders::REFERENCE_TRACER),
+    ) && d.spp == r.spp
+        && r.wall_ms > 0.0
+    {
+        let x = d.wall_ms / r.wall_ms;
+        rows.push((
+            format!(
+                "render {} {}x{}, {} spp, DIRT/the renderer's BVH",
+                d.scene, d.width, d.height, d.spp
+            ),
+            format!("≤ {RENDER_GOAL}"),
+            f(x),
+            met(x, RENDER_GOAL),
+        ));
+    }
+    let process = |backend: &str| {
+        res.processes
+            .iter()
+            .find(|r| r.backend == backend)
+            .and_then(|r| median_of(&r.runs_s).map(|m| (m, r)))
+    };
+    if let (Some((d, row)), Some((e, _))) = (process("cpu"), process("embree"))
+        && e > 0.0
+    {
+        rows.push((
+            format!(
+                "whole `dirt trace` process, {} ({} triangles, {} rays), DIRT/Embree",
+                row.scene, row.triangles, row.rays
+            ),
+            format!("≤ {PROCESS_GOAL}"),
+            f(d / e),
+            met(d / e, PROCESS_GOAL),
+        ));
+    }
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "## Speed goals\n");
+    let _ = writeln!(
+        s,
+        "What DIRT on the CPU aims for beside its peers, and what this run measured (from the tables below; ratios are DIRT / peer, above 1 means DIRT is slower). A trace goal counts as met when the faster traversal meets it: the command line times both on a sample and keeps the faster.\n"
+    );
+    let _ = writeln!(s, "| figure | goal | measured | met |\n|---|---|---:|---|");
+    for (what, goal, measured, met) in rows {
+        let _ = writeln!(s, "| {what} | {goal} | {measured} | {met} |");
+    }
+    let _ = writeln!(s);
+}
+
 fn process_table(s: &mut String, res: &EvalResults) {
     let Some(first) = res.processes.first() else {
         return;
     };
-    let median = |runs: &[f64]| {
-        let mut v = runs.to_vec();
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        (n > 0).then(|| (v[(n - 1) / 2] + v[n / 2]) / 2.0)
-    };
+    let median = median_of;
     let _ = writeln!(
         s,
         "Whole processes on a large scene (`{}`, {} triangles; {} random rays from `dirt rays --kind random`): `dirt trace SCENE --rays RAYS.npy --out HITS.npy --backend B`, timed from start to exit (loading the scene, building, tracing, writing the hits), runs alternated; `cpu` is DIRT at the cost model's choice. `differ` counts hits with another primitive or a `t` more than 1e-4 (relative) from DIRT's.\n",
