@@ -752,7 +752,7 @@ fn tile_xy2(v: &View, vr: &ViewRay, ta: f32, tb: f32) -> [f32; 4] {
         let zz = [za, za, zb, zb];
         from_fn(|k| p[k] / zz[k])
     };
-    from_fn(|k| (s[k] + v.tan) / v.step)
+    from_fn(|k| v.tile_coord(s[k]))
 }
 
 /// The terms a tile boundary `s` multiplies in a side's value `p[axis] − s·w`
@@ -1393,7 +1393,6 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
         // minor tile coordinates of their ends as lanes, none of which
         // depends on the best hit; then each is walked as the plain stage
         // walks it, termination test first.
-        let (tan, step) = (v.tan, v.step);
         let bands = k1 - k0 + 1;
         let mut kept = (u32::MAX, Cut::NONE, Cut::NONE);
         let mut n = 0;
@@ -1438,7 +1437,7 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
                     let z: [f32; BAND_LANES] = from_fn(|q| v.w(o[2] + t[q] * d[2]));
                     from_fn(|q| p[q] / z[q])
                 };
-                from_fn(|q| (s[q] + tan) / step)
+                from_fn(|q| v.tile_coord(s[q]))
             };
             let (pm, qm) = (minor_at(t0), minor_at(t1));
             for q in 0..count as usize {
