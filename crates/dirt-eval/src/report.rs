@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use crate::EvalError;
 use crate::dynamic::medians;
 use crate::harness::EvalResults;
-use crate::measure::{BuildRow, TraceRow, mrays};
+use crate::measure::{BuildRow, TraceRow, median, mrays};
 use crate::plot::{self, Plot};
 
 mod approx;
@@ -753,10 +753,7 @@ const BUILD_REPORTED_ONLY: &str = "layers";
 
 /// The median of a list of runs, if any.
 fn median_of(runs: &[f64]) -> Option<f64> {
-    let mut v = runs.to_vec();
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    (n > 0).then(|| (v[(n - 1) / 2] + v[n / 2]) / 2.0)
+    (!runs.is_empty()).then(|| median(runs.to_vec()))
 }
 
 /// "## Speed goals": every goal, the ratio this run measured for it, and
@@ -904,7 +901,6 @@ fn process_table(s: &mut String, res: &EvalResults) {
     let Some(first) = res.processes.first() else {
         return;
     };
-    let median = median_of;
     let _ = writeln!(
         s,
         "Whole processes on a large scene (`{}`, {} triangles; {} random rays from `dirt rays --kind random`): `dirt trace SCENE --rays RAYS.npy --out HITS.npy --backend B`, timed from start to exit (loading the scene, building, tracing, writing the hits), runs alternated; `cpu` is DIRT at the cost model's choice. `differ` counts hits with another primitive or a `t` more than 1e-4 (relative) from DIRT's.\n",
@@ -918,10 +914,10 @@ fn process_table(s: &mut String, res: &EvalResults) {
         .processes
         .iter()
         .find(|r| r.backend == "cpu")
-        .and_then(|r| median(&r.runs_s));
+        .and_then(|r| median_of(&r.runs_s));
     for r in &res.processes {
         let runs: Vec<String> = r.runs_s.iter().map(|&x| f(x)).collect();
-        let m = median(&r.runs_s);
+        let m = median_of(&r.runs_s);
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} / {} |",
