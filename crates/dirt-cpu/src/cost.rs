@@ -649,13 +649,11 @@ fn first_guess(tris: usize, views: ViewsKind, resolutions: &[u32]) -> u32 {
         .unwrap_or(AdsParams::default().resolution)
 }
 
-/// The triangles' mean extents along the world axes and the mean products
-/// of two of them: the size of a triangle's bounding rectangle in an
-/// orthographic view ([`Extents::area`]), known without a build.
+/// The mean products of a triangle's extents along two world axes: the
+/// size of its bounding rectangle in an orthographic view
+/// ([`Extents::area`]), known without a build.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Extents {
-    /// Mean extent along x, y and z.
-    pub mean: [f64; 3],
     /// Mean product of the extents along the two axes other than x, y and z:
     /// `[y·z, x·z, x·y]`.
     pub cross: [f64; 3],
@@ -668,7 +666,7 @@ impl Extents {
     pub fn of(tris: &[Triangle]) -> Option<Extents> {
         use rayon::prelude::*;
         let part = |chunk: &[Triangle]| {
-            let (mut sum, mut n) = ([0.0f64; 6], 0usize);
+            let (mut sum, mut n) = ([0.0f64; 3], 0usize);
             for t in chunk {
                 // min and max pass NaN over: test the coordinates themselves.
                 if t.v.iter().flatten().all(|x| x.is_finite()) {
@@ -676,7 +674,7 @@ impl Extents {
                     let e = (a.max(b).max(c) - a.min(b).min(c))
                         .to_array()
                         .map(f64::from);
-                    let terms = [e[0], e[1], e[2], e[1] * e[2], e[0] * e[2], e[0] * e[1]];
+                    let terms = [e[1] * e[2], e[0] * e[2], e[0] * e[1]];
                     for (s, x) in sum.iter_mut().zip(terms) {
                         *s += x;
                     }
@@ -685,8 +683,8 @@ impl Extents {
             }
             (sum, n)
         };
-        let parts: Vec<([f64; 6], usize)> = tris.par_chunks(4096).map(part).collect();
-        let (mut sum, mut n) = ([0.0f64; 6], 0usize);
+        let parts: Vec<([f64; 3], usize)> = tris.par_chunks(4096).map(part).collect();
+        let (mut sum, mut n) = ([0.0f64; 3], 0usize);
         for (s, k) in parts {
             for (a, b) in sum.iter_mut().zip(s) {
                 *a += b;
@@ -696,8 +694,7 @@ impl Extents {
         (n > 0).then(|| {
             let m = |k: usize| sum[k] / n as f64;
             Extents {
-                mean: [m(0), m(1), m(2)],
-                cross: [m(3), m(4), m(5)],
+                cross: [m(0), m(1), m(2)],
             }
         })
     }
@@ -1222,7 +1219,6 @@ mod tests {
         );
         let nan = Triangle::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ZERO, Vec3::ONE);
         let e = Extents::of(&[a, nan, b]).expect("two finite triangles");
-        assert_eq!(e.mean, [2.0, 1.0, 2.0]);
         // y·z: (2·0 + 0·4) / 2; x·z: (1·0 + 3·4) / 2; x·y: (1·2 + 3·0) / 2.
         assert_eq!(e.cross, [0.0, 6.0, 1.0]);
         // Looking along z at an image 4 wide: x·y over 16.
