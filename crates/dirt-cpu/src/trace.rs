@@ -99,7 +99,7 @@ pub(crate) fn trace_into_from(
             None
         };
         if let Some(order) = order {
-            let index = |o: &u64| (o & 0xffff_ffff) as usize;
+            let index = |&i: &u32| i as usize;
             // Gathered first: a loop of loads only overlaps the cache misses of
             // reading rays out of order, which the walk would wait on one by one.
             let sorted: Vec<Ray> = order.par_iter().map(|o| rays[index(o)]).collect();
