@@ -1136,7 +1136,8 @@ const SPREAD: [u32; 1 << ORDER_BITS.1] = {
 /// its largest component), then by the Morton code of the cell of their
 /// origin, then by index. The cells divide the origins' bounds into `2^m`
 /// along each axis, `m` the largest (within [`ORDER_BITS`]) with `6·8^m` at
-/// most the number of rays: one to eight rays a (face, cell) on average.
+/// most the number of rays: up to 12 million rays, one to eight rays a
+/// (face, cell) key on average.
 /// The order is a counting sort of those keys, two passes over the rays.
 /// A comparison sort of finer keys (9 bits an axis) cost about 25 ns a ray,
 /// this about 10 (the bunny's batches of 5,000 rays, 2 threads: 125 → 52
@@ -1181,7 +1182,8 @@ pub(crate) fn coherent_order(rays: &[Ray]) -> Option<Vec<u32>> {
     let scale: [f32; 3] = from_fn(|a| top / (hi[a] - lo[a]));
     let cell = |r: &Ray, a: usize| ((r.origin[a] - lo[a]) * scale[a]).clamp(0.0, top) as u32;
     let key = |r: &Ray| {
-        // The face without branches: random directions would mispredict them.
+        // The face without branches and the spread looked up: the keys of
+        // 5,000 rays took about 37 µs so, 50 with branches and `spread3`.
         let d = r.dir.map(f32::abs);
         let x = u32::from((d[0] >= d[1]) & (d[0] >= d[2]));
         let y = (1 - x) & u32::from(d[1] >= d[2]);
