@@ -123,9 +123,9 @@ impl Ads {
         let t0 = Instant::now();
         // fill_primitives needs fill_depth's fragments again: kept while they
         // take no more memory than three times the list offsets will (12 B a
-        // fragment, 4 B a list) and one and a half times the nodes the
-        // fragments found so far will become, which keeps the peak within
-        // its bound (ARCHITECTURE.md, "Memory"). Twice the offsets left the
+        // fragment, 4 B a list) and two and a quarter times the nodes the
+        // fragments found so far will become (fill_depth's EARN), which
+        // keeps the peak within its bound (ARCHITECTURE.md, "Memory"). Twice the offsets left the
         // deforming grid's r128 B2 build 15 of its 128 pieces to clip again
         // (fill_primitives 0.92 -> 0.76 ms; its peak 1.66x -> 1.79x the
         // structure, peak_memory.rs).
