@@ -125,10 +125,10 @@ impl Ads {
         // take no more memory than three times the list offsets will (12 B a
         // fragment, 4 B a list) and two and a quarter times the nodes the
         // fragments found so far will become (fill_depth's EARN), which
-        // keeps the peak within its bound (ARCHITECTURE.md, "Memory"). Twice the offsets left the
-        // deforming grid's r128 B2 build 15 of its 128 pieces to clip again
-        // (fill_primitives 0.92 -> 0.76 ms; its peak 1.66x -> 1.79x the
-        // structure, peak_memory.rs).
+        // keeps the peak within its bound (ARCHITECTURE.md, "Memory"). Twice
+        // the offsets left the deforming grid's r128 B2 build 15 of its 128
+        // pieces to clip again (fill_primitives 0.92 -> 0.76 ms; its peak
+        // 1.66x -> 1.79x the structure, peak_memory.rs).
         let tiles = views.slots() * views.views.first().map_or(0, |v| v.tile_count());
         let keep = tiles.saturating_mul(params.buckets as usize);
         let (depth, fragments) = fill_depth::fill_depth_keeping(&views, tris, keep);

@@ -728,12 +728,8 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     s
 }
 
-/// The fixed setting ([`DEFAULT`]) against the peers and against the cost
-/// model's choice of the headline, so the fixed grid stays reported.
-/// Whole `dirt trace` processes on the large scene, per backend: the
-/// median wall time of its runs and the ratio DIRT / backend.
-/// DIRT's speed goals beside the ratios this run measured, each from the
-/// tables below.
+/// DIRT's speed goals ([`goals_table`]), as ratios DIRT / peer: a headline
+/// trace and build against Embree's.
 const TRACE_GOAL: f64 = 3.0;
 const BUILD_GOAL: f64 = 1.0;
 /// Of the deforming grid's frame, DIRT / the best peer: with a few thousand
@@ -743,6 +739,9 @@ const FRAME_GOAL_MANY: f64 = 1.0;
 
 /// Rays a frame up to which [`FRAME_GOAL_FEW`] applies (the run's 5,000).
 const FEW_RAYS: usize = 10_000;
+
+/// Of the render, DIRT / the renderer's BVH; of the whole `dirt trace`
+/// process on the large scene, DIRT / Embree.
 const RENDER_GOAL: f64 = 2.0;
 const PROCESS_GOAL: f64 = 1.5;
 
@@ -897,6 +896,8 @@ fn goals_table(s: &mut String, res: &EvalResults) {
     let _ = writeln!(s);
 }
 
+/// Whole `dirt trace` processes on the large scene, per backend: the
+/// median wall time of its runs and the ratio DIRT / backend.
 fn process_table(s: &mut String, res: &EvalResults) {
     let Some(first) = res.processes.first() else {
         return;
@@ -935,6 +936,8 @@ fn process_table(s: &mut String, res: &EvalResults) {
     let _ = writeln!(s);
 }
 
+/// The fixed setting ([`DEFAULT`]) against the peers and against the cost
+/// model's choice of the headline, so the fixed grid stays reported.
 fn fixed_default_table(s: &mut String, res: &EvalResults, peers: &[String]) {
     let _ = writeln!(
         s,
