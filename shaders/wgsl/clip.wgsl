@@ -246,18 +246,23 @@ struct Extent {
     hi: f32,
 }
 
-// dirt_math::clip::tile_depth_extent: `clip_x` (`clip_y`) when the polygon's
-// tile range spans more than one column (row); the x planes are 0 and 1, y 2 and 3.
-fn tile_depth_extent(v: View, poly: Polygon, i: u32, j: u32, clip_x: bool, clip_y: bool) -> Extent {
+// dirt_math::clip::tile_depth_extent: the tile's planes inside the range
+// `r` (i0, i1, j0, j1) only: lower x where i > i0, upper x where i < i1, and
+// so for y; the x planes are 0 and 1, y 2 and 3.
+fn tile_depth_extent(v: View, poly: Polygon, i: u32, j: u32, r: vec4<u32>) -> Extent {
     var p = poly;
-    for (var k = select(2u, 0u, clip_x); k < select(2u, 4u, clip_y); k++) {
+    for (var k = 0u; k < 4u; k++) {
+        let inner = select(select(select((j < r.w), (j > r.z), k == 2u), (i < r.y), k == 1u), (i > r.x), k == 0u);
+        if !inner {
+            continue;
+        }
         polygon_clip(&p, block_halfspace(v, i, i + 1u, j, j + 1u, k), v.eps);
         if p.len == 0u {
             return Extent(false, 0.0, 0.0);
         }
     }
-    let r = polygon_depth_range(&p);
-    return Extent(true, r.x - v.eps, r.y + v.eps);
+    let d = polygon_depth_range(&p);
+    return Extent(true, d.x - v.eps, d.y + v.eps);
 }
 
 struct TileRange {

@@ -31,9 +31,9 @@ struct CoverOut {
     // keeps the triangle as it is (Sutherland-Hodgman keeps inside vertices,
     // in order) and the fragments skip it: the same polygon, to the bit.
     @location(2) @interpolate(flat) inside: u32,
-    // Bit 0: the tile range spans more than one column, bit 1: more than
-    // one row (tile_depth_extent clips to those planes only).
-    @location(3) @interpolate(flat) spans: u32,
+    // The tile range (i0, i1, j0, j1): tile_depth_extent clips to the
+    // planes inside it only.
+    @location(3) @interpolate(flat) range: vec4<u32>,
 }
 
 fn tri_vertex(prim: u32, k: u32) -> vec3<f32> {
@@ -86,7 +86,7 @@ fn cover_vs(@builtin(vertex_index) vi: u32, @builtin(instance_index) view: u32) 
         return out;
     }
     out.inside = select(0u, 1u, inside_view(v, a, b, c));
-    out.spans = select(0u, 1u, r.i0 != r.i1) | select(0u, 2u, r.j0 != r.j1);
+    out.range = vec4<u32>(r.i0, r.i1, r.j0, r.j1);
     // Corners 0..5: (lo,lo) (hi,lo) (lo,hi) (hi,lo) (hi,hi) (lo,hi).
     let x_hi = corner == 1u || corner == 3u || corner == 4u;
     let y_hi = corner == 2u || corner == 4u || corner == 5u;
@@ -110,7 +110,7 @@ fn covered(in: CoverOut) -> Covered {
     let v = views[in.view];
     let i = u32(in.pos.x);
     let j = u32(in.pos.y);
-    let e = tile_depth_extent(v, fragment_polygon(v, in.prim, in.inside), i, j, (in.spans & 1u) != 0u, (in.spans & 2u) != 0u);
+    let e = tile_depth_extent(v, fragment_polygon(v, in.prim, in.inside), i, j, in.range);
     let tile = v.slot * tile_count(v) + j * v.tiles + i;
     return Covered(e.ok, tile, e.lo, e.hi);
 }

@@ -21,9 +21,10 @@
 //! ways, and the prologue and those clips were most of the coverage's cost.
 //! Ranges of two by two tiles (half of the bunny's triangles at ortho r32,
 //! where they cost 0.4 of fill_depth's 1.0 ms on one thread) stay with
-//! [`cover_tiles`]: its clips on a polygon of at most eight vertices stored
-//! by component measured 6 % slower, and on every lane at once, as slots
-//! under masks, 40 % slower; its `Polygon` clips are what is left to pay.
+//! [`cover_tiles`], which clips each tile at the middle boundaries only:
+//! its clips (the outer ones too, as then) on a polygon of at most eight
+//! vertices stored by component measured 6 % slower, and on every lane at
+//! once, as slots under masks, 40 % slower.
 //! The tests below check that the fragments, their order and their bits
 //! are [`for_each_fragment`]'s on random triangles and views.
 //!
@@ -177,11 +178,10 @@ fn cover_lanes(
         } else if i0 == i1 && j0 == j1 {
             // cover_tiles on a range of one tile: the unclipped extent.
             Cover::One(i0, j0, zlo[k] - v.eps, zhi[k] + v.eps)
-        } else if two
+        } else if two {
             // The lower tile's index on the axis the range is split along.
-            && let (x_split, lower) = if i0 != i1 { (true, i0) } else { (false, j0) }
-            && let (Some(a), Some(b)) = two_tiles(v, tv, k, x_split, lower)
-        {
+            let (x_split, lower) = if i0 != i1 { (true, i0) } else { (false, j0) };
+            let [a, b] = two_tiles(v, tv, k, x_split, lower);
             Cover::Two([(i0, j0, a), (i1, j1, b)])
         } else {
             Cover::Range(i0, i1, j0, j1)
@@ -189,25 +189,26 @@ fn cover_lanes(
     }
 }
 
-/// The triangle's part in one tile as the lanes see it: `None` where it
-/// takes a clip they do not follow (then [`cover_tiles`] covers the
-/// triangle), else its depth extent there, if it reaches the tile.
-type Part = Option<Option<(f32, f32)>>;
-
 /// [`cover_tiles`] on a range of two tiles for lane `k`: the lower tile
 /// (index `lower` on the split axis: x where `x_split`, else y) and the
-/// upper. There each tile's part is the triangle clipped to the tile's two
-/// planes on that axis, then its depth range. The range's margin leaves the
-/// triangle inside the plane at its outer edge, so one real clip a tile is
-/// left, at the middle boundary, followed here as [`Polygon::clip_into`]
-/// makes it: its output vertices in order as slots (`v0, x01, v1, x12, v2,
-/// x20`: each vertex where it is inside, each crossing edge's
-/// intersection), the depth range folded over them in that order. A clip
-/// at an outer edge that would change the polygon makes the part `None`.
+/// upper, each with the triangle's depth extent there, if it reaches it.
+/// Each tile takes one clip ([`tile_depth_extent`] leaves out the planes
+/// at the range's outer edges), at the middle boundary, followed here as
+/// [`Polygon::clip_into`] makes it: its output vertices in order as slots
+/// (`v0, x01, v1, x12, v2, x20`: each vertex where it is inside, each
+/// crossing edge's intersection), the depth range folded over them in that
+/// order.
 ///
 /// [`Polygon::clip_into`]: dirt_math::clip::Polygon::clip_into
+/// [`tile_depth_extent`]: dirt_math::clip::tile_depth_extent
 #[inline(always)]
-fn two_tiles(v: &View, tv: &[[L; 3]; 3], k: usize, x_split: bool, lower: u32) -> (Part, Part) {
+fn two_tiles(
+    v: &View,
+    tv: &[[L; 3]; 3],
+    k: usize,
+    x_split: bool,
+    lower: u32,
+) -> [Option<(f32, f32)>; 2] {
     let eps = v.eps;
     // HalfSpace::eval of the split axis' Lo and Hi at slope (or offset) `s`.
     let lo = |s: f32, a: f32, z: f32| {
@@ -224,28 +225,19 @@ fn two_tiles(v: &View, tv: &[[L; 3]; 3], k: usize, x_split: bool, lower: u32) ->
             s * z - a + eps
         }
     };
-    // Polygon::clip_into of the triangle `(a, z)` by the plane valued `f` at its vertices.
-    let clip = |f: [f32; 3], a: [f32; 3], z: [f32; 3]| -> [(bool, f32, f32); 6] {
-        from_fn(|s| {
-            let (n, m) = (s / 2, (s / 2 + 1) % 3);
-            if s % 2 == 0 {
-                (f[n] >= 0.0, a[n], z[n])
-            } else {
-                let w = f[n] / (f[n] - f[m]);
-                (
-                    (f[n] >= 0.0) != (f[m] >= 0.0),
-                    a[n] + (a[m] - a[n]) * w,
-                    z[n] + (z[m] - z[n]) * w,
-                )
-            }
-        })
-    };
-    // Polygon::depth_range, widened by eps as cover_tiles does.
-    let extent = |slots: &[(bool, f32, f32); 6]| -> Option<(f32, f32)> {
+    // Polygon::clip_into of the triangle `(a, z)` by the plane valued `f` at
+    // its vertices, folded into its depth range, widened by eps as
+    // cover_tiles does.
+    let extent = |f: [f32; 3], z: [f32; 3]| -> Option<(f32, f32)> {
         let (mut zlo, mut zhi, mut any) = (f32::INFINITY, f32::NEG_INFINITY, false);
-        for &(kept, _, z) in slots {
-            if kept {
-                (zlo, zhi, any) = (fmin(zlo, z), fmax(zhi, z), true);
+        for n in 0..3 {
+            let m = (n + 1) % 3;
+            if f[n] >= 0.0 {
+                (zlo, zhi, any) = (fmin(zlo, z[n]), fmax(zhi, z[n]), true);
+            }
+            if (f[n] >= 0.0) != (f[m] >= 0.0) {
+                let x = z[n] + (z[m] - z[n]) * (f[n] / (f[n] - f[m]));
+                (zlo, zhi, any) = (fmin(zlo, x), fmax(zhi, x), true);
             }
         }
         any.then_some((zlo - eps, zhi + eps))
@@ -253,29 +245,12 @@ fn two_tiles(v: &View, tv: &[[L; 3]; 3], k: usize, x_split: bool, lower: u32) ->
     let c = if x_split { 0 } else { 1 };
     let a: [f32; 3] = from_fn(|n| tv[n][c][k]);
     let z: [f32; 3] = from_fn(|n| tv[n][2][k]);
-    // The lower tile's edges.
-    let b: [f32; 3] = from_fn(|e| v.boundary(lower + e as u32));
-    // The lower tile: its outer plane (nothing or everything inside), then the middle.
-    let outer: [f32; 3] = from_fn(|n| lo(b[0], a[n], z[n]));
-    let first = if outer.iter().all(|&f| f >= 0.0) {
-        Some(extent(&clip(from_fn(|n| hi(b[1], a[n], z[n])), a, z)))
-    } else if outer.iter().all(|&f| !(f >= 0.0)) {
-        Some(None)
-    } else {
-        None
-    };
-    // The upper tile: the middle plane, then its outer plane on what is left.
-    let slots = clip(from_fn(|n| lo(b[1], a[n], z[n])), a, z);
-    let kept = slots.iter().filter(|s| s.0);
-    let inside = kept.clone().filter(|s| hi(b[2], s.1, s.2) >= 0.0).count();
-    let second = if inside == kept.count() {
-        Some(extent(&slots))
-    } else if inside == 0 {
-        Some(None)
-    } else {
-        None
-    };
-    (first, second)
+    // The middle boundary.
+    let b = v.boundary(lower + 1);
+    [
+        extent(from_fn(|n| hi(b, a[n], z[n])), z),
+        extent(from_fn(|n| lo(b, a[n], z[n])), z),
+    ]
 }
 
 /// [`for_each_fragment`](crate::fill_depth::for_each_fragment) for every
@@ -499,10 +474,12 @@ mod tests {
     }
 
     #[test]
-    fn two_tiles_leaves_a_clip_at_an_outer_edge_to_cover_tiles() {
+    fn two_tiles_clips_at_the_middle_boundary_only() {
         // A view-space triangle over tiles 7, 8 and 9 of an orthographic
-        // view (x from 7.3 to 9.5 tiles): asked as if its range were two
-        // tiles, the lanes must decline the part whose outer plane cuts it.
+        // view (x from 7.3 to 9.5 tiles), asked as if its range were tiles 7
+        // and 8: each part is tile_depth_extent's over that range, and the
+        // upper tile is not clipped at its outer edge (x = 9 tiles), so its
+        // extent reaches the far vertex's depth.
         let views = view_set(2, 16, Vec3::ZERO);
         let v = &views.views[0];
         let x = |tiles: f32| v.boundary(0) + tiles * v.step;
@@ -513,15 +490,11 @@ mod tests {
             [x(8.0), x(3.8), z0 + 0.2],
         ];
         let tv: [[L; 3]; 3] = from_fn(|n| from_fn(|c| [corner[n][c]; LANES]));
-        let part = |lower: u32| two_tiles(v, &tv, 0, true, lower);
-        // Tiles 8 and 9: tile 8's outer plane (x = 8 tiles) cuts.
-        assert!(part(8).0.is_none(), "{:?}", part(8));
-        // Tiles 7 and 8: tile 7 is clipped at 8 only; tile 8's outer plane (9) cuts.
-        let (a, b) = part(7);
-        assert!(matches!(a, Some(Some(_))), "{a:?}");
-        assert!(b.is_none(), "{b:?}");
-        // Tiles 10 and 11: the triangle is wholly below both.
-        assert_eq!(part(10), (Some(None), Some(None)));
+        let poly = Polygon::triangle(corner[0], corner[1], corner[2]);
+        let extent = |i: u32| dirt_math::clip::tile_depth_extent(v, &poly, (7, 8, 3, 3), i, 3);
+        assert_eq!(two_tiles(v, &tv, 0, true, 7), [extent(7), extent(8)]);
+        let (_, hi) = extent(8).expect("the triangle reaches tile 8");
+        assert_eq!(hi, z0 + 0.2 + v.eps);
     }
 
     #[test]

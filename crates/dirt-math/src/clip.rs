@@ -372,13 +372,14 @@ pub fn clip_triangle_to_view_into(v: &View, tri: [[f32; 3]; 3], out: &mut Polygo
 /// of its tile range `(i0, i1, j0, j1)` ([`polygon_tile_range`]), rounded
 /// outward by the view's `eps`; `None` when it does not touch the tile.
 ///
-/// The polygon is clipped to the tile's x planes only when the range spans
-/// more than one column, to its y planes only when it spans more than one
-/// row: a range of one column holds every point of the polygon up to its
-/// margin, so the x planes could only trim slivers of that margin, and the
-/// unclipped polygon's extent contains the clipped one's. It stays
-/// conservative and saves four plane clips on a triangle inside one tile,
-/// the common case at fine resolutions.
+/// The polygon is clipped only to the tile's planes inside the range: its
+/// lower x plane where `i > i0`, its upper where `i < i1`, and so for y
+/// (x planes first, lower before upper). The range holds every point of
+/// the polygon up to its margin, so a plane at the range's outer edge could
+/// only trim slivers of that margin, and the polygon's extent without that
+/// clip contains the extent with it. It stays conservative, saves the four
+/// plane clips of a triangle inside one tile (the common case at fine
+/// resolutions) and half of those of one over two by two tiles.
 pub fn tile_depth_extent(
     v: &View,
     poly: &Polygon,
@@ -386,12 +387,8 @@ pub fn tile_depth_extent(
     i: u32,
     j: u32,
 ) -> Option<(f32, f32)> {
-    let (i0, i1, j0, j1) = range;
     let mut p = *poly;
-    let [lo_x, hi_x, lo_y, hi_y] = block_frustum(v, i, i + 1, j, j + 1);
-    let x: &[HalfSpace] = if i0 != i1 { &[lo_x, hi_x] } else { &[] };
-    let y: &[HalfSpace] = if j0 != j1 { &[lo_y, hi_y] } else { &[] };
-    for h in x.iter().chain(y) {
+    for h in inner_planes(v, range, i, j).iter().flatten() {
         p.clip(h, v.eps);
         if p.len == 0 {
             return None;
@@ -399,6 +396,24 @@ pub fn tile_depth_extent(
     }
     let (lo, hi) = p.depth_range()?;
     Some((lo - v.eps, hi + v.eps))
+}
+
+/// The planes of tile `(i, j)` that [`tile_depth_extent`] clips to, in its
+/// order (lower x, upper x, lower y, upper y): those inside the range.
+#[inline]
+fn inner_planes(
+    v: &View,
+    (i0, i1, j0, j1): (u32, u32, u32, u32),
+    i: u32,
+    j: u32,
+) -> [Option<HalfSpace>; 4] {
+    let [lo_x, hi_x, lo_y, hi_y] = block_frustum(v, i, i + 1, j, j + 1);
+    [
+        (i > i0).then_some(lo_x),
+        (i < i1).then_some(hi_x),
+        (j > j0).then_some(lo_y),
+        (j < j1).then_some(hi_y),
+    ]
 }
 
 /// Conservative range of tiles `[i0, i1] × [j0, j1]` (inclusive) a view-clipped
@@ -439,28 +454,6 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
     ))
 }
 
-/// `poly` clipped to two half-spaces in turn ([`Polygon::clip`] twice, bit
-/// for bit), writing into the scratch polygons `a` and `b` only where a clip
-/// changes something: the result is `poly`, `a` or `b`, never a copy.
-fn clip_pair<'a>(
-    poly: &'a Polygon,
-    [h0, h1]: [&HalfSpace; 2],
-    eps: f32,
-    a: &'a mut Polygon,
-    b: &'a mut Polygon,
-) -> &'a Polygon {
-    let p = if poly.clip_into(h0, eps, a) {
-        &*a
-    } else {
-        poly
-    };
-    if p.len > 0 && p.clip_into(h1, eps, b) {
-        b
-    } else {
-        p
-    }
-}
-
 /// Calls `f(i, j, zlo, zhi)` for every tile of `v` whose dilated frustum the
 /// triangle (in view space) touches, with its conservative depth extent there.
 /// This is the coverage rule shared by `fill_depth` and `fill_primitives`.
@@ -486,69 +479,78 @@ pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], f: impl FnMut(u32, u3
 pub fn cover_tiles(
     v: &View,
     poly: &Polygon,
-    (i0, i1, j0, j1): (u32, u32, u32, u32),
+    range: (u32, u32, u32, u32),
     mut f: impl FnMut(u32, u32, f32, f32),
 ) {
-    // Scratch polygons for the per-tile clips: written only as far as used,
-    // and never copied (each clip reads one and writes the next). The last
-    // clip of a tile computes only depths (`clip_pair_depth_range`).
+    let (i0, i1, j0, j1) = range;
+    // Scratch polygons for the clips: written only as far as used, and
+    // never copied (each clip reads one and writes the next). A tile's last
+    // clip computes only depths (`Polygon::clipped_depth_range`).
     let (mut a, mut lo, mut hi) = (Polygon::EMPTY, Polygon::EMPTY, Polygon::EMPTY);
     for i in i0..=i1 {
-        // One column: no x planes (tile_depth_extent).
-        let x_planes = || {
-            let [lo_x, hi_x, _, _] = block_frustum(v, i, i + 1, j0, j0 + 1);
-            [lo_x, hi_x]
-        };
+        // tile_depth_extent's x planes are the same for the whole column.
+        let [lo_x, hi_x, ..] = inner_planes(v, range, i, j0);
         if j0 == j1 {
             // One row: the column's clip is the tile's.
-            let depths = if i0 == i1 {
-                poly.depth_range()
-            } else {
-                let [lo_x, hi_x] = x_planes();
-                clip_pair_depth_range(poly, [&lo_x, &hi_x], v.eps, &mut lo)
-            };
-            if let Some((lo, hi)) = depths {
+            if let Some((lo, hi)) = clip_depth_range(poly, [lo_x, hi_x], v.eps, &mut lo) {
                 f(i, j0, lo - v.eps, hi + v.eps);
             }
             continue;
         }
-        let column = if i0 == i1 {
-            poly
-        } else {
-            let [lo_x, hi_x] = x_planes();
-            let p = clip_pair(poly, [&lo_x, &hi_x], v.eps, &mut lo, &mut hi);
-            if p.len == 0 {
-                continue;
-            }
-            p
-        };
+        let column = clip_some(poly, [lo_x, hi_x], v.eps, &mut lo, &mut hi);
+        if column.len == 0 {
+            continue;
+        }
         for j in j0..=j1 {
-            let [_, _, lo_y, hi_y] = block_frustum(v, i, i + 1, j, j + 1);
-            if let Some((lo, hi)) = clip_pair_depth_range(column, [&lo_y, &hi_y], v.eps, &mut a) {
+            let [_, _, lo_y, hi_y] = inner_planes(v, range, i, j);
+            if let Some((lo, hi)) = clip_depth_range(column, [lo_y, hi_y], v.eps, &mut a) {
                 f(i, j, lo - v.eps, hi + v.eps);
             }
         }
     }
 }
 
-/// `clip_pair(..).depth_range()`: the second clip computes only depths
+/// `poly` clipped to the half-spaces present, in turn ([`Polygon::clip`],
+/// bit for bit), writing into the scratch polygons `a` and `b` only where a
+/// clip changes something: the result is `poly`, `a` or `b`, never a copy.
+fn clip_some<'a>(
+    poly: &'a Polygon,
+    [h0, h1]: [Option<HalfSpace>; 2],
+    eps: f32,
+    a: &'a mut Polygon,
+    b: &'a mut Polygon,
+) -> &'a Polygon {
+    let p = match h0 {
+        Some(h) if poly.clip_into(&h, eps, a) => &*a,
+        _ => poly,
+    };
+    match h1 {
+        Some(h) if p.len > 0 && p.clip_into(&h, eps, b) => b,
+        _ => p,
+    }
+}
+
+/// `clip_some(..).depth_range()`, the last clip computing only depths
 /// ([`Polygon::clipped_depth_range`]).
 #[inline]
-fn clip_pair_depth_range(
+fn clip_depth_range(
     poly: &Polygon,
-    [h0, h1]: [&HalfSpace; 2],
+    [h0, h1]: [Option<HalfSpace>; 2],
     eps: f32,
     a: &mut Polygon,
 ) -> Option<(f32, f32)> {
-    let p = if poly.clip_into(h0, eps, a) {
-        &*a
-    } else {
-        poly
+    let (first, last) = match (h0, h1) {
+        (Some(h0), Some(h1)) => (Some(h0), Some(h1)),
+        (h, None) | (None, h) => (None, h),
     };
-    if p.len > 0 {
-        p.clipped_depth_range(h1, eps)
-    } else {
-        None
+    let p = match first {
+        Some(h) if poly.clip_into(&h, eps, a) => &*a,
+        _ => poly,
+    };
+    match last {
+        _ if p.len == 0 => None,
+        Some(h) => p.clipped_depth_range(&h, eps),
+        None => p.depth_range(),
     }
 }
 
