@@ -387,8 +387,11 @@ pub fn tile_depth_extent(
     i: u32,
     j: u32,
 ) -> Option<(f32, f32)> {
+    let (i0, i1, j0, j1) = range;
     let mut p = *poly;
-    for h in inner_planes(v, range, i, j).iter().flatten() {
+    let x = inner_planes(v, 0, i, (i0, i1));
+    let y = inner_planes(v, 1, j, (j0, j1));
+    for h in x.iter().chain(&y).flatten() {
         p.clip(h, v.eps);
         if p.len == 0 {
             return None;
@@ -398,21 +401,14 @@ pub fn tile_depth_extent(
     Some((lo - v.eps, hi + v.eps))
 }
 
-/// The planes of tile `(i, j)` that [`tile_depth_extent`] clips to, in its
-/// order (lower x, upper x, lower y, upper y): those inside the range.
+/// The planes of tile `k` on `axis` (0: x, 1: y) that [`tile_depth_extent`]
+/// clips to, lower then upper ([`block_frustum`]'s): those inside the
+/// range `[k0, k1]` on that axis.
 #[inline]
-fn inner_planes(
-    v: &View,
-    (i0, i1, j0, j1): (u32, u32, u32, u32),
-    i: u32,
-    j: u32,
-) -> [Option<HalfSpace>; 4] {
-    let [lo_x, hi_x, lo_y, hi_y] = block_frustum(v, i, i + 1, j, j + 1);
+fn inner_planes(v: &View, axis: usize, k: u32, (k0, k1): (u32, u32)) -> [Option<HalfSpace>; 2] {
     [
-        (i > i0).then_some(lo_x),
-        (i < i1).then_some(hi_x),
-        (j > j0).then_some(lo_y),
-        (j < j1).then_some(hi_y),
+        (k > k0).then(|| v.lo(axis, v.boundary(k))),
+        (k < k1).then(|| v.hi(axis, v.boundary(k + 1))),
     ]
 }
 
@@ -479,31 +475,30 @@ pub fn for_each_covered_tile(v: &View, tri: [[f32; 3]; 3], f: impl FnMut(u32, u3
 pub fn cover_tiles(
     v: &View,
     poly: &Polygon,
-    range: (u32, u32, u32, u32),
+    (i0, i1, j0, j1): (u32, u32, u32, u32),
     mut f: impl FnMut(u32, u32, f32, f32),
 ) {
-    let (i0, i1, j0, j1) = range;
     // Scratch polygons for the clips: written only as far as used, and
     // never copied (each clip reads one and writes the next). A tile's last
     // clip computes only depths (`Polygon::clipped_depth_range`).
     let (mut a, mut lo, mut hi) = (Polygon::EMPTY, Polygon::EMPTY, Polygon::EMPTY);
     for i in i0..=i1 {
         // tile_depth_extent's x planes are the same for the whole column.
-        let [lo_x, hi_x, ..] = inner_planes(v, range, i, j0);
+        let x = inner_planes(v, 0, i, (i0, i1));
         if j0 == j1 {
             // One row: the column's clip is the tile's.
-            if let Some((lo, hi)) = clip_depth_range(poly, [lo_x, hi_x], v.eps, &mut lo) {
+            if let Some((lo, hi)) = clip_depth_range(poly, x, v.eps, &mut lo) {
                 f(i, j0, lo - v.eps, hi + v.eps);
             }
             continue;
         }
-        let column = clip_some(poly, [lo_x, hi_x], v.eps, &mut lo, &mut hi);
+        let column = clip_some(poly, x, v.eps, &mut lo, &mut hi);
         if column.len == 0 {
             continue;
         }
         for j in j0..=j1 {
-            let [_, _, lo_y, hi_y] = inner_planes(v, range, i, j);
-            if let Some((lo, hi)) = clip_depth_range(column, [lo_y, hi_y], v.eps, &mut a) {
+            let y = inner_planes(v, 1, j, (j0, j1));
+            if let Some((lo, hi)) = clip_depth_range(column, y, v.eps, &mut a) {
                 f(i, j, lo - v.eps, hi + v.eps);
             }
         }
@@ -539,10 +534,8 @@ fn clip_depth_range(
     eps: f32,
     a: &mut Polygon,
 ) -> Option<(f32, f32)> {
-    let (first, last) = match (h0, h1) {
-        (Some(h0), Some(h1)) => (Some(h0), Some(h1)),
-        (h, None) | (None, h) => (None, h),
-    };
+    // The last plane present takes only depths.
+    let (first, last) = if h1.is_some() { (h0, h1) } else { (None, h0) };
     let p = match first {
         Some(h) if poly.clip_into(&h, eps, a) => &*a,
         _ => poly,
