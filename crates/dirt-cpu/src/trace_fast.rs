@@ -35,7 +35,9 @@
 //!   plain stage does, the termination test first. This breaks the chain of
 //!   divisions from one band to the next. A tile's pair of minor-axis cuts
 //!   is kept for the next band, whose first tile is usually the last tile of
-//!   this one.
+//!   this one. In an orthographic view every side of an axis has the same
+//!   slope, `±d`, so which of a cut's ends is bounded is decided once for
+//!   the lanes ([`ortho_sides`]), not by selects in each.
 //! - Without statistics, a short linear walk that could only reach cells
 //!   whose depth bounds its depth span misses is left out
 //!   ([`RayState::meets_nothing`], on at most four Hi-Z cells): it would
@@ -735,6 +737,45 @@ fn cuts_of<const N: usize>(f0: [f32; N], f1: [f32; N]) -> ([f32; N], [f32; N]) {
     )
 }
 
+/// The `(lo, hi)` of `N` cuts, as lanes.
+type CutLanes<const N: usize> = ([f32; N], [f32; N]);
+
+/// The cuts of an orthographic view's Lo sides at the boundaries `lo` and
+/// its Hi sides at `hi`, along an axis where the view ray is `o + t·d`:
+/// `(Lo, Hi)`, each `(lo, hi)` as lanes, [`Cut::of`]'s bits. With
+/// [`w_terms`] 1 and 0, a side's value `o − s·1 + eps` is `o − s + eps`,
+/// and its slope `d − s·0` is `d` (the Hi side's `s·0 − d` is `−d`) but
+/// for the sign of a zero, which no cut looks at: one slope for all lanes
+/// ([`cuts_of_slope`]).
+#[inline(always)]
+fn ortho_sides<const N: usize>(
+    (o, d): (f32, f32),
+    lo: [f32; N],
+    hi: [f32; N],
+    eps: f32,
+) -> (CutLanes<N>, CutLanes<N>) {
+    (
+        cuts_of_slope(from_fn(|k| o - lo[k] + eps), d),
+        cuts_of_slope(from_fn(|k| hi[k] - o + eps), -d),
+    )
+}
+
+/// [`cuts_of`] of `N` half-spaces whose slopes all equal `f1` wherever they
+/// are not zero, decided once for the lanes: where `f1 > 0` each lane's
+/// `lo` is its `t` and its `hi` no bound, where `f1 < 0` the other way
+/// round, the bits [`cut_lo`] and [`cut_hi`] give lane by lane without
+/// their three selects a value. A slope of zero goes to [`cuts_of`].
+#[inline(always)]
+fn cuts_of_slope<const N: usize>(f0: [f32; N], f1: f32) -> ([f32; N], [f32; N]) {
+    if f1 > 0.0 {
+        (from_fn(|k| -f0[k] / f1), [f32::INFINITY; N])
+    } else if f1 < 0.0 {
+        ([f32::NEG_INFINITY; N], from_fn(|k| -f0[k] / f1))
+    } else {
+        cuts_of(f0, [f1; N])
+    }
+}
+
 /// [`tile_xy`](dirt_math::dda::tile_xy) at `ta` and at `tb`, as four lanes `[xa, ya, xb, yb]`.
 #[inline(always)]
 fn tile_xy2(v: &View, vr: &ViewRay, ta: f32, tb: f32) -> [f32; 4] {
@@ -1419,13 +1460,18 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
         let (wo, wd) = w_terms(v, vr);
         let cuts = |axis: usize, k: u32| {
             let (s0, s1) = (slope[k as usize], slope[k as usize + 1]);
-            let (lo, hi) = cut_lanes(
-                [o[axis], s1 * wo],
-                [s0 * wo, o[axis]],
-                [d[axis], s1 * wd],
-                [s0 * wd, d[axis]],
-                vr.eps,
-            );
+            let (lo, hi) = if v.ortho {
+                let (l, h) = ortho_sides((o[axis], d[axis]), [s0], [s1], vr.eps);
+                ([l.0[0], h.0[0]], [l.1[0], h.1[0]])
+            } else {
+                cut_lanes(
+                    [o[axis], s1 * wo],
+                    [s0 * wo, o[axis]],
+                    [d[axis], s1 * wd],
+                    [s0 * wd, d[axis]],
+                    vr.eps,
+                )
+            };
             let cut = |k: usize| Cut {
                 lo: lo[k],
                 hi: hi[k],
@@ -1448,20 +1494,26 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
             });
             let s0: [f32; BAND_LANES] = from_fn(|q| slope[ks[q] as usize]);
             let s1: [f32; BAND_LANES] = from_fn(|q| slope[ks[q] as usize + 1]);
-            let (l_lo, l_hi) = cut_lanes(
-                [o[major]; BAND_LANES],
-                s0.map(|s| s * wo),
-                [d[major]; BAND_LANES],
-                s0.map(|s| s * wd),
-                vr.eps,
-            );
-            let (h_lo, h_hi) = cut_lanes(
-                s1.map(|s| s * wo),
-                [o[major]; BAND_LANES],
-                s1.map(|s| s * wd),
-                [d[major]; BAND_LANES],
-                vr.eps,
-            );
+            let ((l_lo, l_hi), (h_lo, h_hi)) = if v.ortho {
+                ortho_sides((o[major], d[major]), s0, s1, vr.eps)
+            } else {
+                (
+                    cut_lanes(
+                        [o[major]; BAND_LANES],
+                        s0.map(|s| s * wo),
+                        [d[major]; BAND_LANES],
+                        s0.map(|s| s * wd),
+                        vr.eps,
+                    ),
+                    cut_lanes(
+                        s1.map(|s| s * wo),
+                        [o[major]; BAND_LANES],
+                        s1.map(|s| s * wd),
+                        [d[major]; BAND_LANES],
+                        vr.eps,
+                    ),
+                )
+            };
             let mut t0 = [iv.t0; BAND_LANES];
             let mut t1 = [iv.t1; BAND_LANES];
             for (lo, hi) in [(l_lo, l_hi), (h_lo, h_hi)] {
@@ -2285,6 +2337,17 @@ mod tests {
             for (c, h) in sides.iter().zip(&planes) {
                 let one = Cut::of(h, &vr);
                 prop_assert_eq!((c.lo.to_bits(), c.hi.to_bits()), (one.lo.to_bits(), one.hi.to_bits()));
+            }
+            // An orthographic view's sides with one slope for all lanes.
+            if v.ortho {
+                for a in 0..2 {
+                    let ((llo, lhi), (hlo, hhi)) = ortho_sides((vr.o[a], vr.d[a]), [sx, sy], [sy, sx], vr.eps);
+                    for (q, s) in [sx, sy].into_iter().enumerate() {
+                        let (lo, hi) = (Cut::of(&v.lo(a, s), &vr), Cut::of(&v.hi(a, [sy, sx][q]), &vr));
+                        prop_assert_eq!((llo[q].to_bits(), lhi[q].to_bits()), (lo.lo.to_bits(), lo.hi.to_bits()));
+                        prop_assert_eq!((hlo[q].to_bits(), hhi[q].to_bits()), (hi.lo.to_bits(), hi.hi.to_bits()));
+                    }
+                }
             }
         }
     }
