@@ -38,6 +38,32 @@
 //!   this one. In an orthographic view every side of an axis has the same
 //!   slope, `±d`, so which of a cut's ends is bounded is decided once for
 //!   the lanes ([`ortho_sides`]), not by selects in each.
+//! - Without statistics, where the plain stage is exact ([`Scene::exact`]:
+//!   every view set but a single view that does not hold every triangle),
+//!   the tiles of a band are searched over the band's interval, without
+//!   their minor-axis cuts. A tile's own interval is the band's cut by two
+//!   more half-spaces, so it lies within it: the tile's depth span and
+//!   segment box are wider and its candidates more, and the tiles of the
+//!   band's index range whose own interval is empty are searched too. Each
+//!   candidate gives a hit of the ray or none, and the plain stage's
+//!   closest, every ray's closest of all triangles there, is among them, so
+//!   the closest is the same; the walk still ends where a band starts after
+//!   the best hit. Elsewhere a candidate the plain stage does not test could
+//!   give a hit it misses, and the tiles are cut as before. The eval's rays,
+//!   2 threads, best of four alternated runs: bunny (ortho r32 B8) 207 →
+//!   199 ns a ray, cornell (ortho2 r16 B8) 371 → 352, layers (ortho r32 B8)
+//!   137 → 126, 2CylinderEngine (ortho r128 B8) 471 → 416; foliage (ortho
+//!   r16 B8) 552 → 608 and spheres (ortho r64 B8) 353 → 374 are slower,
+//!   their tiles dense enough that the wider intervals cost more tests than
+//!   the cuts did. Both come from bands whose ends lie in two tiles:
+//!   cutting only the tiles reached through the dilation alone kept the
+//!   loss and lost the gains; cutting only the tiles the ends reach lost
+//!   the gains and most of the loss. Also measured and not kept: a band's
+//!   tiles cut only where they meet one another, each cut a product by
+//!   `1 / d` widened to hold the division's (one thread: about half the
+//!   gain elsewhere, foliage unchanged; two threads: foliage as slow as
+//!   here), and the tiles' cuts made as lanes, four tiles of a band at a
+//!   time (no gain).
 //! - Without statistics, a short linear walk that could only reach cells
 //!   whose depth bounds its depth span misses is left out
 //!   ([`RayState::meets_nothing`], on at most four Hi-Z cells): it would
@@ -188,6 +214,11 @@ pub(crate) struct Scene<'a> {
     /// Per view, the depth bounds of all its content (its Hi-Z root cell),
     /// decoded: `[+inf, -inf]` where it has none ([`Scene::to_content`]).
     content: [[f32; 2]; MAX_VIEWS],
+    /// Whether the plain stage's hit is every ray's closest of all
+    /// triangles: every kind of view set but a single view that does not
+    /// hold every triangle ([`ViewsKind`]'s docs, [`Ads::sees_all`]). Only
+    /// there may the walk test more candidates than the plain stage.
+    exact: bool,
 }
 
 impl<'a> Scene<'a> {
@@ -219,6 +250,7 @@ impl<'a> Scene<'a> {
         });
         Some(Scene {
             content,
+            exact: ads.views.kind != ViewsKind::Single || ads.sees_all,
             ads,
             tris,
             views,
@@ -1424,7 +1456,9 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
     /// `dirt_math::dda::walk_tiles` with the plain stage's visitor, inlined.
     /// Bands and tiles are clipped with [`Cut`]s; a tile's pair of minor-axis
     /// cuts is kept for the next band, whose first tile is usually the last
-    /// tile of this one (module docs).
+    /// tile of this one. Without statistics, where the plain stage is exact
+    /// ([`Scene::exact`]), a band's tiles are searched over the band's
+    /// interval instead, without their cuts (module docs).
     fn linear(&mut self, f: usize, vr: &ViewRay, iv: Interval) {
         let sc = self.sc;
         let v = &sc.views[f];
@@ -1550,6 +1584,17 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
                 let Some((m0, m1)) = index_range(pm[q], qm[q], delta, v.tiles) else {
                     continue;
                 };
+                if !STATS && sc.exact {
+                    // Each tile searched over the band's interval, which
+                    // holds the tile's own: the same closest hit, without
+                    // the tiles' cuts (module docs).
+                    for e in 0..=(m1 - m0) {
+                        let m = if minor_forward { m0 + e } else { m1 - e };
+                        let (i, j) = if major == 0 { (k, m) } else { (m, k) };
+                        self.visit_tile(v, vr, i, j, band);
+                    }
+                    continue;
+                }
                 for e in 0..=(m1 - m0) {
                     let m = if minor_forward { m0 + e } else { m1 - e };
                     if kept.0 != m {
