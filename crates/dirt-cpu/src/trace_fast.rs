@@ -771,6 +771,41 @@ fn cuts_of<const N: usize>(f0: [f32; N], f1: [f32; N]) -> ([f32; N], [f32; N]) {
     )
 }
 
+/// The cuts of the Lo sides at the boundaries (slopes) `lo` and the Hi
+/// sides at `hi` of `axis` in view `v`, as lanes: `(Lo, Hi)`, each
+/// `(lo, hi)`, [`Cut::of`]'s bits ([`ortho_sides`] in an orthographic view;
+/// else [`cut_lanes`] with the sides' [`w_terms`]).
+#[inline(always)]
+fn side_cuts<const N: usize>(
+    v: &View,
+    vr: &ViewRay,
+    axis: usize,
+    lo: [f32; N],
+    hi: [f32; N],
+) -> (CutLanes<N>, CutLanes<N>) {
+    let (o, d) = (vr.o[axis], vr.d[axis]);
+    if v.ortho {
+        return ortho_sides((o, d), lo, hi, vr.eps);
+    }
+    let (wo, wd) = w_terms(v, vr);
+    (
+        cut_lanes(
+            [o; N],
+            lo.map(|s| s * wo),
+            [d; N],
+            lo.map(|s| s * wd),
+            vr.eps,
+        ),
+        cut_lanes(
+            hi.map(|s| s * wo),
+            [o; N],
+            hi.map(|s| s * wd),
+            [d; N],
+            vr.eps,
+        ),
+    )
+}
+
 /// The `(lo, hi)` of `N` cuts, as lanes.
 type CutLanes<const N: usize> = ([f32; N], [f32; N]);
 
@@ -1491,28 +1526,20 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
         }
         let forward = b[major] >= a[major];
         let minor_forward = b[minor] >= a[minor];
-        // Lo at boundary k and Hi at boundary k + 1 of an axis, as two lanes.
         let (o, d) = (vr.o, vr.d);
-        let (wo, wd) = w_terms(v, vr);
+        // The cuts of Lo at boundary k and Hi at boundary k + 1 of an axis.
         let cuts = |axis: usize, k: u32| {
-            let (s0, s1) = (slope[k as usize], slope[k as usize + 1]);
-            let (lo, hi) = if v.ortho {
-                let (l, h) = ortho_sides((o[axis], d[axis]), [s0], [s1], vr.eps);
-                ([l.0[0], h.0[0]], [l.1[0], h.1[0]])
-            } else {
-                cut_lanes(
-                    [o[axis], s1 * wo],
-                    [s0 * wo, o[axis]],
-                    [d[axis], s1 * wd],
-                    [s0 * wd, d[axis]],
-                    vr.eps,
-                )
+            let [s0, s1] = [slope[k as usize], slope[k as usize + 1]];
+            let ((l_lo, l_hi), (h_lo, h_hi)) = side_cuts(v, vr, axis, [s0], [s1]);
+            let lo = Cut {
+                lo: l_lo[0],
+                hi: l_hi[0],
             };
-            let cut = |k: usize| Cut {
-                lo: lo[k],
-                hi: hi[k],
+            let hi = Cut {
+                lo: h_lo[0],
+                hi: h_hi[0],
             };
-            (cut(0), cut(1))
+            (lo, hi)
         };
         // Bands are prepared four at a time: their cuts, intervals and the
         // minor tile coordinates of their ends as lanes, none of which
@@ -1530,26 +1557,7 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
             });
             let s0: [f32; BAND_LANES] = from_fn(|q| slope[ks[q] as usize]);
             let s1: [f32; BAND_LANES] = from_fn(|q| slope[ks[q] as usize + 1]);
-            let ((l_lo, l_hi), (h_lo, h_hi)) = if v.ortho {
-                ortho_sides((o[major], d[major]), s0, s1, vr.eps)
-            } else {
-                (
-                    cut_lanes(
-                        [o[major]; BAND_LANES],
-                        s0.map(|s| s * wo),
-                        [d[major]; BAND_LANES],
-                        s0.map(|s| s * wd),
-                        vr.eps,
-                    ),
-                    cut_lanes(
-                        s1.map(|s| s * wo),
-                        [o[major]; BAND_LANES],
-                        s1.map(|s| s * wd),
-                        [d[major]; BAND_LANES],
-                        vr.eps,
-                    ),
-                )
-            };
+            let ((l_lo, l_hi), (h_lo, h_hi)) = side_cuts(v, vr, major, s0, s1);
             let mut t0 = [iv.t0; BAND_LANES];
             let mut t1 = [iv.t1; BAND_LANES];
             for (lo, hi) in [(l_lo, l_hi), (h_lo, h_hi)] {
