@@ -90,6 +90,27 @@
 //!   is every triangle's closest there. The deforming grid's 100,000
 //!   camera rays (r256 B1, alternated runs, best of 20 each): 13.9 → 12.4
 //!   ms on 1 thread, 7.1 → 6.3 ms on 2.
+//! - There, for a batch with a ray from the apex for every
+//!   [`APEX_RAYS_PER_TRIANGLE`] triangles (with `DirtCpu`, counting the
+//!   earlier traces of the build), each triangle's box in the view's image
+//!   is computed first ([`apex_boxes`]: the range of its vertices' tile
+//!   coordinates, widened as [`polygon_tile_range`] widens it before it
+//!   floors them), and a listed triangle whose image box misses the ray's
+//!   (its direction's tile coordinates within the look's margin,
+//!   [`Apex::coords`]) is not tested. The view-space boxes above do not
+//!   serve these rays: such a ray crosses a tile along its depth, and its
+//!   segment's box spans the tile. That changes no hit: the closest hit
+//!   point lies on the ray, so its tile coordinates lie within the margin
+//!   of the direction's (what makes the look hold every tile the walk
+//!   reaches), and on the triangle, so within its image range widened by
+//!   the coverage rule's dilation (what makes the rule list the triangle
+//!   in the tile that holds the point); a triangle left out is not entered
+//!   in the mailbox. The deforming grid's 100,000 camera rays at r256 B1
+//!   tested about a third as many triangles: 1383 → 946 instructions a ray
+//!   (1 thread), 86 → 73 ns a ray on 2 threads (best of ten, alternated),
+//!   and build plus first trace 12.7 → 11.6 ms; the boxes cost about 180
+//!   instructions a triangle, which 5,000 rays on those 32,768 triangles
+//!   would not earn back.
 //! - Without statistics, the rays of a chunk ([`LOOKS`]) are looked at from
 //!   the apex before any is traced, [`LOOK_LANES`] side by side where the
 //!   tiles' content bits are made ([`Scene::looks_at_apex`], each lane
@@ -169,6 +190,7 @@
 //!   or 8 (a single view is one lane, not eight).
 //!
 //! [`HiZCell::clip`]: dirt_math::dda::HiZCell::clip
+//! [`polygon_tile_range`]: dirt_math::clip::polygon_tile_range
 
 use crate::Ads;
 use crate::intersect_lanes::{LANES, intersect_closest_lanes};
@@ -211,6 +233,8 @@ pub(crate) struct Scene<'a> {
     /// [`triangle_boxes`], when [`Scene::prepare_for`] found they pay
     /// (computed, or kept from earlier traces in a [`BoxCache`]); else empty.
     boxes: Cow<'a, [ViewBox]>,
+    /// [`apex_boxes`], when [`Scene::prepare_for`] found they pay; else empty.
+    screen: Cow<'a, [ViewBox]>,
     /// A single perspective view's apex check ([`Apex`]).
     apex: Option<Apex<'a>>,
     /// Per view, the depth bounds of all its content (its Hi-Z root cell),
@@ -262,6 +286,7 @@ impl<'a> Scene<'a> {
             slopes,
             lanes: ViewLanes::new(views),
             boxes: Cow::Borrowed(&[]),
+            screen: Cow::Borrowed(&[]),
             apex: Apex::of(views, content[0][0], ads.sees_all),
         })
     }
@@ -305,9 +330,9 @@ impl<'a> Scene<'a> {
         cache: Option<&'a mut BoxCache>,
     ) {
         let pairs = self.tris.len().saturating_mul(self.ads.views.slots());
+        let (ads, tris) = (self.ads, self.tris);
         if origin.is_none() {
             let pays = |rays: u64| rays.saturating_mul(PAIRS_PER_RAY as u64) >= pairs as u64;
-            let (ads, tris) = (self.ads, self.tris);
             match cache {
                 Some(cache) => {
                     cache.rays = cache.rays.saturating_add(rays.len() as u64);
@@ -321,12 +346,32 @@ impl<'a> Scene<'a> {
                 }
                 None => {}
             }
+            return;
         }
         if let (Some(o), Some(apex)) = (origin, self.apex.as_mut())
             && o.to_array().map(f32::to_bits) == apex.at
-            && rays.len().saturating_mul(TILES_PER_RAY) >= self.views[0].tile_count()
         {
-            apex.mark(&self.ads.hiz[0][..self.views[0].tile_count()]);
+            if rays.len().saturating_mul(TILES_PER_RAY) >= self.views[0].tile_count() {
+                apex.mark(&ads.hiz[0][..self.views[0].tile_count()]);
+            }
+            if apex.direct {
+                let pays =
+                    |rays: u64| rays.saturating_mul(APEX_RAYS_PER_TRIANGLE) >= tris.len() as u64;
+                let v = apex.view;
+                match cache {
+                    Some(cache) => {
+                        cache.apex_rays = cache.apex_rays.saturating_add(rays.len() as u64);
+                        if cache.screen.is_empty() && pays(cache.apex_rays) {
+                            cache.screen = apex_boxes(v, tris);
+                        }
+                        self.screen = Cow::Borrowed(&cache.screen);
+                    }
+                    None if pays(rays.len() as u64) => {
+                        self.screen = Cow::Owned(apex_boxes(v, tris));
+                    }
+                    None => {}
+                }
+            }
         }
     }
 
@@ -477,13 +522,59 @@ pub(crate) struct BoxCache {
     rays: u64,
     /// [`triangle_boxes`] once computed; else empty.
     boxes: Vec<ViewBox>,
+    /// Rays traced from the apex of a single view that holds every triangle.
+    apex_rays: u64,
+    /// [`apex_boxes`] once computed; else empty.
+    screen: Vec<ViewBox>,
 }
 
 impl BoxCache {
     /// Bytes held.
     pub(crate) fn bytes(&self) -> usize {
-        self.boxes.capacity() * std::mem::size_of::<ViewBox>()
+        (self.boxes.capacity() + self.screen.capacity()) * std::mem::size_of::<ViewBox>()
     }
+}
+
+/// Rays from the apex ([`Apex::direct`]) one triangle's [`apex_boxes`] box
+/// pays for is one over this ([`Scene::prepare_for`]).
+const APEX_RAYS_PER_TRIANGLE: u64 = 2;
+
+/// Per triangle, its box in `v`'s image, in tile coordinates: the ranges
+/// of [`polygon_tile_range`] before they are floored to tiles (its
+/// vertices' coordinates, each range widened by its dilation at the
+/// triangle's smallest depth, which holds the image of every point within
+/// the view's `eps` of the triangle, and 1/256 of a tile of rounding room).
+/// Its depth is every depth. For a view that holds every triangle
+/// ([`Apex::direct`]); a triangle not in front of the apex gets
+/// [`ViewBox::WHOLE`].
+///
+/// [`polygon_tile_range`]: dirt_math::clip::polygon_tile_range
+pub(crate) fn apex_boxes(v: &View, tris: &[Triangle]) -> Vec<ViewBox> {
+    use rayon::prelude::*;
+    let mut out = vec![ViewBox::WHOLE; tris.len()];
+    out.par_chunks_mut(BOX_CHUNK)
+        .zip(tris.par_chunks(BOX_CHUNK))
+        .for_each(|(out, tris)| {
+            for (o, t) in out.iter_mut().zip(tris) {
+                let p: [[f32; 3]; 3] = from_fn(|k| v.to_view(t.vertex(k)));
+                let zlo = fmin(fmin(p[0][2], p[1][2]), p[2][2]);
+                // Behind the apex: never left out.
+                if !(zlo > 0.0) {
+                    continue;
+                }
+                let delta = v.eps / v.w(zlo) / v.step + 1.0 / 256.0;
+                let x: [f32; 3] = from_fn(|k| v.tile_coord(p[k][0] / v.w(p[k][2])));
+                let y: [f32; 3] = from_fn(|k| v.tile_coord(p[k][1] / v.w(p[k][2])));
+                let lo = |c: [f32; 3]| fmin(fmin(c[0], c[1]), c[2]) - delta;
+                let hi = |c: [f32; 3]| fmax(fmax(c[0], c[1]), c[2]) + delta;
+                let b = [lo(x), hi(x), lo(y), hi(y)];
+                // Not a number (a degenerate view): never left out.
+                if b.iter().all(|c| !c.is_nan()) {
+                    *o = ViewBox::new([b[0], b[2], f32::NEG_INFINITY], [b[1], b[3], f32::INFINITY]);
+                }
+            }
+        });
+    out
 }
 
 /// Triangles a task of [`triangle_boxes`] takes.
@@ -1107,16 +1198,7 @@ impl<'a> Apex<'a> {
         if ray.origin.map(f32::to_bits) != self.at {
             return None;
         }
-        let [dx, dy, dz] = self.view.dir_to_view(ray.dir());
-        if !(dz > 0.0) {
-            return None;
-        }
-        // One division: the margin covers a few more roundings.
-        let r = 1.0 / dz;
-        let x = (dx * r + self.view.tan) * self.per_step;
-        let y = (dy * r + self.view.tan) * self.per_step;
-        // Wider for a coordinate so large that its ulps approach a tile.
-        let m = self.margin + fmax(x.abs(), y.abs()) * (1.0 / 65536.0);
+        let (x, y, m) = self.coords(ray)?;
         let tiles = self.view.tiles as f32;
         if !(x + m >= 0.0 && y + m >= 0.0 && x - m < tiles && y - m < tiles) {
             // Beside the view (or not finite: left to the walk).
@@ -1133,6 +1215,25 @@ impl<'a> Apex<'a> {
             return Some((!sc.nothing_in(self.view, &r)).then_some(r));
         }
         Some(self.any_content(r.i, r.j).then_some(r))
+    }
+
+    /// For a ray from the apex that points ahead, its direction's tile
+    /// coordinates `(x, y)` and the margin `m` around them that holds the
+    /// tile coordinate of every point of the ray that its walk could reach
+    /// ([`Apex::look`]).
+    #[inline(always)]
+    fn coords(&self, ray: &Ray) -> Option<(f32, f32, f32)> {
+        let [dx, dy, dz] = self.view.dir_to_view(ray.dir());
+        if !(dz > 0.0) {
+            return None;
+        }
+        // One division: the margin covers a few more roundings.
+        let r = 1.0 / dz;
+        let x = (dx * r + self.view.tan) * self.per_step;
+        let y = (dy * r + self.view.tan) * self.per_step;
+        // Wider for a coordinate so large that its ulps approach a tile.
+        let m = self.margin + fmax(x.abs(), y.abs()) * (1.0 / 65536.0);
+        Some((x, y, m))
     }
 
     /// [`Apex::look`] for each of `rays`, where the tiles' content is
@@ -1810,6 +1911,19 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
     fn direct(&mut self, v: &View, tiles: &Reach) {
         let vr = v.ray(self.ray);
         let base = v.slot as usize * v.tile_count();
+        // The ray's box in the image, against the triangles' (module docs).
+        let screen = &self.sc.screen[..];
+        let point = match &self.sc.apex {
+            Some(apex) if !screen.is_empty() => apex.coords(self.ray),
+            _ => None,
+        };
+        let boxes = point.map(|(x, y, m)| {
+            let ray = ViewBox::new(
+                [x - m, y - m, f32::NEG_INFINITY],
+                [x + m, y + m, f32::INFINITY],
+            );
+            (screen, ray)
+        });
         for j in tiles.j.0..=tiles.j.1 {
             for i in tiles.i.0..=tiles.i.1 {
                 let tile = base + (j * v.tiles + i) as usize;
@@ -1818,7 +1932,7 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
                 // Empty bounds are [+inf, -inf].
                 if zmin <= zmax {
                     let all = (f32::NEG_INFINITY, f32::INFINITY);
-                    self.buckets(&vr, tile, (zmin, zmax), all, None);
+                    self.buckets(&vr, tile, (zmin, zmax), all, boxes);
                 }
             }
         }
@@ -2131,8 +2245,11 @@ mod tests {
                     Ray::new(eye, d, 0.0, f32::INFINITY)
                 })
                 .collect();
-            let sc = Scene::new(&ads, &tris).expect("fast path");
+            let mut sc = Scene::new(&ads, &tris).expect("fast path");
             assert_eq!(sc.apex.as_ref().is_some_and(|a| a.direct), holds, "{p:?}");
+            // Enough rays for the triangles' image boxes, which `trace` reads.
+            sc.prepare_for(&rays, Some(eye), None);
+            assert_eq!(!sc.screen.is_empty(), holds, "{p:?}");
             for trav in [Traversal::Linear, Traversal::HiZ] {
                 let hits = crate::trace(&ads, &tris, &rays, trav);
                 for (r, h) in rays.iter().zip(&hits) {
