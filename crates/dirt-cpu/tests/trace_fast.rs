@@ -295,3 +295,78 @@ fn a_tracers_boxes_are_kept_once_its_traces_pay_and_dropped_by_a_build() {
         assert_eq!(t.boxes_bytes(), kept);
     }
 }
+
+// Rays from the apex of a single view that holds every triangle read each
+// triangle's box in the view's image once they pay: `DirtCpu` computes the
+// boxes in the trace whose rays from the apex, with those traced before it
+// on the build, number one for every 2 triangles, and keeps them until the
+// next build. The hits stay brute force's throughout.
+#[test]
+fn a_tracers_image_boxes_are_kept_once_rays_from_the_apex_pay() {
+    use dirt_core::Tracer;
+    let mut rng = Rng(91);
+    let tris = scene(120, &mut rng);
+    let eye = Vec3::new(0.2, 1.5, 6.0);
+    let p = AdsParams {
+        views: ViewsKind::Single,
+        resolution: 64,
+        buckets: 2,
+        tile: 1,
+        center: Some(eye),
+        axis: None,
+    };
+    let mut t = dirt_cpu::DirtCpu::new(p, Traversal::Linear);
+    t.build(&tris).expect("build");
+    let traced = |t: &mut dirt_cpu::DirtCpu, tris: &[Triangle], rs: &[Ray]| {
+        let hits = t.trace(rs).expect("trace");
+        let want = dirt_cpu::brute_force::trace(tris, rs);
+        for (k, (h, w)) in hits.iter().zip(&want).enumerate() {
+            assert_eq!(h.bits(), w.bits(), "ray {k} {:?}", rs[k]);
+        }
+    };
+    let from_eye = |n: usize, tris: &[Triangle], rng: &mut Rng| -> Vec<Ray> {
+        (0..n)
+            .map(|k| {
+                let t = &tris[rng.below(tris.len())];
+                let d = match k % 3 {
+                    0 => t.vertex(k % 3) - eye,
+                    1 => t.vertex(0) + (t.vertex(1) - t.vertex(0)) * rng.f() - eye,
+                    _ => t.vertex(k % 3) + rng.v(0.05) - eye,
+                };
+                Ray::new(eye, d, 0.0, f32::INFINITY)
+            })
+            .collect()
+    };
+    // From elsewhere: never counted towards them.
+    let elsewhere = rays(tris.len(), &tris, &mut rng);
+    traced(&mut t, &tris, &elsewhere);
+    let before = t.boxes_bytes();
+    // A third of the rays needed, twice, then the rest.
+    let need = tris.len().div_ceil(2);
+    let third = need / 3;
+    let mut sent = 0;
+    for n in [third, third, need - 2 * third] {
+        assert_eq!(
+            t.boxes_bytes(),
+            before,
+            "{sent} of {need} rays from the apex"
+        );
+        traced(&mut t, &tris, &from_eye(n, &tris, &mut rng));
+        sent += n;
+    }
+    assert_eq!(t.boxes_bytes(), before + tris.len() * 32, "{need} rays pay");
+    traced(&mut t, &tris, &from_eye(third, &tris, &mut rng));
+    assert_eq!(t.boxes_bytes(), before + tris.len() * 32, "kept");
+    // A build over other triangles drops them; they are paid for again.
+    let moved: Vec<Triangle> = tris
+        .iter()
+        .map(|t| {
+            let s = |k: usize| t.vertex(k) * 0.9 + Vec3::new(0.05, -0.03, 0.02);
+            Triangle::new(s(0), s(1), s(2))
+        })
+        .collect();
+    t.build(&moved).expect("rebuild");
+    assert_eq!(t.boxes_bytes(), 0, "dropped by the build");
+    traced(&mut t, &moved, &from_eye(need, &moved, &mut rng));
+    assert_eq!(t.boxes_bytes(), moved.len() * 32, "paid again");
+}
