@@ -228,6 +228,16 @@ proptest! {
     }
 }
 
+/// `tris` shrunk and moved a little: the next frame of a moving scene.
+fn moved(tris: &[Triangle]) -> Vec<Triangle> {
+    tris.iter()
+        .map(|t| {
+            let s = |k: usize| t.vertex(k) * 0.9 + Vec3::new(0.05, -0.03, 0.02);
+            Triangle::new(s(0), s(1), s(2))
+        })
+        .collect()
+}
+
 // `DirtCpu` keeps a build's triangle boxes across its traces: computed in
 // the trace whose rays, with those traced before it from more than one
 // point, number one for every 4 (triangle, view) pairs, not before; rays
@@ -276,13 +286,7 @@ fn a_tracers_boxes_are_kept_once_its_traces_pay_and_dropped_by_a_build() {
     traced(&mut t, &many[..third]);
     assert_eq!(t.boxes_bytes(), pairs * 32, "kept");
     // A build over other triangles: their own boxes, once paid again.
-    let moved: Vec<Triangle> = tris
-        .iter()
-        .map(|t| {
-            let s = |k: usize| t.vertex(k) * 0.9 + Vec3::new(0.05, -0.03, 0.02);
-            Triangle::new(s(0), s(1), s(2))
-        })
-        .collect();
+    let moved = moved(&tris);
     t.build(&moved).expect("rebuild");
     assert_eq!(t.boxes_bytes(), 0, "dropped by the build");
     let ads = Ads::build(&moved, &p).expect("the same structure");
@@ -358,13 +362,7 @@ fn a_tracers_image_boxes_are_kept_once_rays_from_the_apex_pay() {
     traced(&mut t, &tris, &from_eye(third, &tris, &mut rng));
     assert_eq!(t.boxes_bytes(), before + tris.len() * 32, "kept");
     // A build over other triangles drops them; they are paid for again.
-    let moved: Vec<Triangle> = tris
-        .iter()
-        .map(|t| {
-            let s = |k: usize| t.vertex(k) * 0.9 + Vec3::new(0.05, -0.03, 0.02);
-            Triangle::new(s(0), s(1), s(2))
-        })
-        .collect();
+    let moved = moved(&tris);
     t.build(&moved).expect("rebuild");
     assert_eq!(t.boxes_bytes(), 0, "dropped by the build");
     traced(&mut t, &moved, &from_eye(need, &moved, &mut rng));
