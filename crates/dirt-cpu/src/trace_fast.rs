@@ -321,7 +321,11 @@ impl<'a> Scene<'a> {
     ///
     /// For rays that all start at the apex of a single view ([`Apex`]),
     /// numbering at least one for every [`TILES_PER_RAY`] tiles, it marks
-    /// the view's tiles with content instead ([`Apex::mark`]).
+    /// the view's tiles with content instead ([`Apex::mark`]); where the
+    /// view holds every triangle, it computes the triangles' image boxes
+    /// ([`apex_boxes`]) once such rays number one for every
+    /// [`APEX_RAYS_PER_TRIANGLE`] triangles (with a `cache`, counting those
+    /// of the earlier traces, and kept there).
     /// `origin` is the rays' [`common_origin`](crate::cost::common_origin).
     pub(crate) fn prepare_for(
         &mut self,
@@ -545,7 +549,8 @@ const APEX_RAYS_PER_TRIANGLE: u64 = 2;
 /// triangle's smallest depth, which holds the image of every point within
 /// the view's `eps` of the triangle, and 1/256 of a tile of rounding room).
 /// Its depth is every depth. For a view that holds every triangle
-/// ([`Apex::direct`]); a triangle not in front of the apex gets
+/// ([`Apex::direct`]); a triangle with a vertex not in front of half the
+/// near plane, or with coordinates that are not numbers, gets
 /// [`ViewBox::WHOLE`].
 ///
 /// [`polygon_tile_range`]: dirt_math::clip::polygon_tile_range
@@ -558,8 +563,10 @@ pub(crate) fn apex_boxes(v: &View, tris: &[Triangle]) -> Vec<ViewBox> {
             for (o, t) in out.iter_mut().zip(tris) {
                 let p: [[f32; 3]; 3] = from_fn(|k| v.to_view(t.vertex(k)));
                 let zlo = fmin(fmin(p[0][2], p[1][2]), p[2][2]);
-                // Behind the apex: never left out.
-                if !(zlo > 0.0) {
+                // Where `View::w` would clamp a depth (not in front of half
+                // the near plane, which a view that holds every triangle
+                // has none of), the image is not the projection: never left out.
+                if !(zlo > v.near * 0.5) {
                     continue;
                 }
                 let delta = v.eps / v.w(zlo) / v.step + 1.0 / 256.0;
