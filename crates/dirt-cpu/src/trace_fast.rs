@@ -196,7 +196,7 @@ use crate::Ads;
 use crate::intersect_lanes::{LANES, intersect_closest_lanes};
 use dirt_core::{RayStats, Traversal, ViewsKind};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
-use dirt_math::clip::{HalfSpace, Interval, ray_depth, ray_point, view_frustum};
+use dirt_math::clip::{HalfSpace, Interval, ray_depth, ray_point, tile_extent, view_frustum};
 use dirt_math::dda::{child_order, dilation, hiz_width};
 use dirt_math::encode::ordered_to_f32;
 use dirt_math::num::{floor_index, fmax, fmin};
@@ -334,22 +334,11 @@ impl<'a> Scene<'a> {
         cache: Option<&'a mut BoxCache>,
     ) {
         let pairs = self.tris.len().saturating_mul(self.ads.views.slots());
-        let (ads, tris) = (self.ads, self.tris);
+        let (ads, tris, n) = (self.ads, self.tris, rays.len() as u64);
         if origin.is_none() {
             let pays = |rays: u64| rays.saturating_mul(PAIRS_PER_RAY as u64) >= pairs as u64;
-            match cache {
-                Some(cache) => {
-                    cache.rays = cache.rays.saturating_add(rays.len() as u64);
-                    if cache.boxes.is_empty() && pays(cache.rays) {
-                        cache.boxes = triangle_boxes(&ads.views, tris);
-                    }
-                    self.boxes = Cow::Borrowed(&cache.boxes);
-                }
-                None if pays(rays.len() as u64) => {
-                    self.boxes = Cow::Owned(triangle_boxes(&ads.views, tris));
-                }
-                None => {}
-            }
+            let cache = cache.map(|c| &mut c.view);
+            self.boxes = Paid::boxes(cache, n, pays, || triangle_boxes(&ads.views, tris));
             return;
         }
         if let (Some(o), Some(apex)) = (origin, self.apex.as_mut())
@@ -362,19 +351,8 @@ impl<'a> Scene<'a> {
                 let pays =
                     |rays: u64| rays.saturating_mul(APEX_RAYS_PER_TRIANGLE) >= tris.len() as u64;
                 let v = apex.view;
-                match cache {
-                    Some(cache) => {
-                        cache.apex_rays = cache.apex_rays.saturating_add(rays.len() as u64);
-                        if cache.screen.is_empty() && pays(cache.apex_rays) {
-                            cache.screen = apex_boxes(v, tris);
-                        }
-                        self.screen = Cow::Borrowed(&cache.screen);
-                    }
-                    None if pays(rays.len() as u64) => {
-                        self.screen = Cow::Owned(apex_boxes(v, tris));
-                    }
-                    None => {}
-                }
+                let cache = cache.map(|c| &mut c.image);
+                self.screen = Paid::boxes(cache, n, pays, || apex_boxes(v, tris));
             }
         }
     }
@@ -449,7 +427,6 @@ const PAIRS_PER_RAY: usize = 4;
 /// `eps` (each vertex inside every plane: the frustum is convex) gets the
 /// whole space, [`ViewBox::WHOLE`], and is never left out.
 pub(crate) fn triangle_boxes(set: &ViewSet, tris: &[Triangle]) -> Vec<ViewBox> {
-    use rayon::prelude::*;
     let n = tris.len();
     let mut out = vec![ViewBox::WHOLE; set.slots() * n];
     let partial = set.kind == ViewsKind::Single;
@@ -460,24 +437,19 @@ pub(crate) fn triangle_boxes(set: &ViewSet, tris: &[Triangle]) -> Vec<ViewBox> {
             continue;
         };
         let margin = 2.0 * v.eps;
-        slice
-            .par_chunks_mut(BOX_CHUNK)
-            .zip(tris.par_chunks(BOX_CHUNK))
-            .for_each(|(out, tris)| {
-                for (o, t) in out.iter_mut().zip(tris) {
-                    let p: [[f32; 3]; 3] = from_fn(|k| v.to_view(t.vertex(k)));
-                    if partial
-                        && !planes
-                            .iter()
-                            .all(|h| p.iter().all(|&p| h.eval(p, -v.eps) >= 0.0))
-                    {
-                        continue;
-                    }
-                    let lo: [f32; 3] = from_fn(|c| fmin(fmin(p[0][c], p[1][c]), p[2][c]) - margin);
-                    let hi: [f32; 3] = from_fn(|c| fmax(fmax(p[0][c], p[1][c]), p[2][c]) + margin);
-                    *o = ViewBox::new(lo, hi);
-                }
-            });
+        boxes_of(slice, tris, |t| {
+            let p: [[f32; 3]; 3] = from_fn(|k| v.to_view(t.vertex(k)));
+            if partial
+                && !planes
+                    .iter()
+                    .all(|h| p.iter().all(|&p| h.eval(p, -v.eps) >= 0.0))
+            {
+                return None;
+            }
+            let lo: [f32; 3] = from_fn(|c| fmin(fmin(p[0][c], p[1][c]), p[2][c]) - margin);
+            let hi: [f32; 3] = from_fn(|c| fmax(fmax(p[0][c], p[1][c]), p[2][c]) + margin);
+            Some(ViewBox::new(lo, hi))
+        });
     }
     out
 }
@@ -518,24 +490,58 @@ impl ViewBox {
 /// computed in the trace whose rays, with those of the traces before it,
 /// number one for every [`PAIRS_PER_RAY`] (triangle, view) pairs
 /// ([`Scene::prepare_for`]), where a single trace would need that many
-/// itself. Rays from one point do not count: they do not read the boxes.
-/// A new build starts a new cache.
+/// itself. Rays from one point do not count: they do not read those boxes.
+/// Rays from the apex of a single view that holds every triangle read the
+/// triangles' image boxes instead, paid for and kept the same way. A new
+/// build starts a new cache.
 #[derive(Debug, Default)]
 pub(crate) struct BoxCache {
-    /// Rays traced (from more than one point, without statistics).
-    rays: u64,
-    /// [`triangle_boxes`] once computed; else empty.
-    boxes: Vec<ViewBox>,
-    /// Rays traced from the apex of a single view that holds every triangle.
-    apex_rays: u64,
-    /// [`apex_boxes`] once computed; else empty.
-    screen: Vec<ViewBox>,
+    /// [`triangle_boxes`], for rays from more than one point (without
+    /// statistics).
+    view: Paid,
+    /// [`apex_boxes`], for rays from the apex of a single view that holds
+    /// every triangle.
+    image: Paid,
 }
 
 impl BoxCache {
     /// Bytes held.
     pub(crate) fn bytes(&self) -> usize {
-        (self.boxes.capacity() + self.screen.capacity()) * std::mem::size_of::<ViewBox>()
+        (self.view.boxes.capacity() + self.image.boxes.capacity()) * std::mem::size_of::<ViewBox>()
+    }
+}
+
+/// Boxes of one kind that the rays traced on a build pay for.
+#[derive(Debug, Default)]
+struct Paid {
+    /// Rays traced of the kind that reads them.
+    rays: u64,
+    /// The boxes once computed; else empty.
+    boxes: Vec<ViewBox>,
+}
+
+impl Paid {
+    /// The boxes for a batch of `n` rays that read them: with a `cache`,
+    /// computed by `make` once the rays traced on the build, these
+    /// included, pay for them (`pays`) and kept there; without one,
+    /// computed for this batch if it pays alone; else none.
+    fn boxes<'a>(
+        cache: Option<&'a mut Paid>,
+        n: u64,
+        pays: impl Fn(u64) -> bool,
+        make: impl FnOnce() -> Vec<ViewBox>,
+    ) -> Cow<'a, [ViewBox]> {
+        match cache {
+            Some(c) => {
+                c.rays = c.rays.saturating_add(n);
+                if c.boxes.is_empty() && pays(c.rays) {
+                    c.boxes = make();
+                }
+                Cow::Borrowed(&c.boxes)
+            }
+            None if pays(n) => Cow::Owned(make()),
+            None => Cow::Borrowed(&[]),
+        }
     }
 }
 
@@ -543,45 +549,52 @@ impl BoxCache {
 /// pays for is one over this ([`Scene::prepare_for`]).
 const APEX_RAYS_PER_TRIANGLE: u64 = 2;
 
-/// Per triangle, its box in `v`'s image, in tile coordinates: the ranges
-/// of [`polygon_tile_range`] before they are floored to tiles (its
-/// vertices' coordinates, each range widened by its dilation at the
-/// triangle's smallest depth, which holds the image of every point within
-/// the view's `eps` of the triangle, and 1/256 of a tile of rounding room).
-/// Its depth is every depth. For a view that holds every triangle
-/// ([`Apex::direct`]); a triangle with a vertex not in front of half the
-/// near plane, or with coordinates that are not numbers, gets
+/// Per triangle, its box in `v`'s image, in tile coordinates: its
+/// [`tile_extent`], which holds the image of every point within the
+/// view's `eps` of the triangle (what [`polygon_tile_range`] floors to the
+/// tiles it is listed in). Its depth is every depth. For a view that holds
+/// every triangle ([`Apex::direct`]); a triangle with a vertex not in front
+/// of half the near plane, or with coordinates that are not numbers, gets
 /// [`ViewBox::WHOLE`].
 ///
 /// [`polygon_tile_range`]: dirt_math::clip::polygon_tile_range
 pub(crate) fn apex_boxes(v: &View, tris: &[Triangle]) -> Vec<ViewBox> {
-    use rayon::prelude::*;
     let mut out = vec![ViewBox::WHOLE; tris.len()];
+    boxes_of(&mut out, tris, |t| {
+        let p: [[f32; 3]; 3] = from_fn(|k| v.to_view(t.vertex(k)));
+        // Where `View::w` would clamp a depth (not in front of half the near
+        // plane, which a view that holds every triangle has none of), the
+        // image is not the projection: never left out.
+        if !p.iter().all(|p| p[2] > v.near * 0.5) {
+            return None;
+        }
+        let [x0, x1, y0, y1] = tile_extent(v, &p)?;
+        // Not a number (a degenerate view): never left out.
+        [x0, x1, y0, y1]
+            .iter()
+            .all(|c| !c.is_nan())
+            .then(|| ViewBox::new([x0, y0, f32::NEG_INFINITY], [x1, y1, f32::INFINITY]))
+    });
+    out
+}
+
+/// Each triangle's box `f(t)` into its place in `out` (as long), where it
+/// has one, on all threads.
+fn boxes_of(
+    out: &mut [ViewBox],
+    tris: &[Triangle],
+    f: impl Fn(&Triangle) -> Option<ViewBox> + Sync,
+) {
+    use rayon::prelude::*;
     out.par_chunks_mut(BOX_CHUNK)
         .zip(tris.par_chunks(BOX_CHUNK))
         .for_each(|(out, tris)| {
             for (o, t) in out.iter_mut().zip(tris) {
-                let p: [[f32; 3]; 3] = from_fn(|k| v.to_view(t.vertex(k)));
-                let zlo = fmin(fmin(p[0][2], p[1][2]), p[2][2]);
-                // Where `View::w` would clamp a depth (not in front of half
-                // the near plane, which a view that holds every triangle
-                // has none of), the image is not the projection: never left out.
-                if !(zlo > v.near * 0.5) {
-                    continue;
-                }
-                let delta = v.eps / v.w(zlo) / v.step + 1.0 / 256.0;
-                let x: [f32; 3] = from_fn(|k| v.tile_coord(p[k][0] / v.w(p[k][2])));
-                let y: [f32; 3] = from_fn(|k| v.tile_coord(p[k][1] / v.w(p[k][2])));
-                let lo = |c: [f32; 3]| fmin(fmin(c[0], c[1]), c[2]) - delta;
-                let hi = |c: [f32; 3]| fmax(fmax(c[0], c[1]), c[2]) + delta;
-                let b = [lo(x), hi(x), lo(y), hi(y)];
-                // Not a number (a degenerate view): never left out.
-                if b.iter().all(|c| !c.is_nan()) {
-                    *o = ViewBox::new([b[0], b[2], f32::NEG_INFINITY], [b[1], b[3], f32::INFINITY]);
+                if let Some(b) = f(t) {
+                    *o = b;
                 }
             }
         });
-    out
 }
 
 /// Triangles a task of [`triangle_boxes`] takes.

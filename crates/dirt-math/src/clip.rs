@@ -412,10 +412,19 @@ fn inner_planes(v: &View, axis: usize, k: u32, (k0, k1): (u32, u32)) -> [Option<
     ]
 }
 
-/// Conservative range of tiles `[i0, i1] × [j0, j1]` (inclusive) a view-clipped
-/// polygon may touch.
-pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u32)> {
-    let (zlo, _) = poly.depth_range()?;
+/// Conservative extent in tile coordinates, `[x0, x1, y0, y1]`, of the
+/// view-clipped polygon with these view-space vertices: the range of their
+/// coordinates, each widened by the image of the view's `eps` at their
+/// smallest depth plus 1/256 of a tile of rounding room, so that it holds
+/// the image of every point within `eps` of the polygon. `None` without
+/// vertices. [`polygon_tile_range`] floors it to tiles.
+#[inline]
+pub fn tile_extent(v: &View, vertices: &[[f32; 3]]) -> Option<[f32; 4]> {
+    if vertices.is_empty() {
+        return None;
+    }
+    // Polygon::depth_range's smallest depth.
+    let zlo = vertices.iter().fold(f32::INFINITY, |lo, p| fmin(lo, p[2]));
     let z = v.w(zlo);
     // Image error from the dilation at the smallest depth, plus rounding room.
     let delta = v.eps / z / v.step + 1.0 / 256.0;
@@ -425,7 +434,7 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
         f32::INFINITY,
         f32::NEG_INFINITY,
     );
-    for p in poly.vertices() {
+    for p in vertices {
         let pz = v.w(p[2]);
         let x = v.tile_coord(p[0] / pz);
         let y = v.tile_coord(p[1] / pz);
@@ -434,19 +443,22 @@ pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u3
         ylo = fmin(ylo, y);
         yhi = fmax(yhi, y);
     }
+    Some([xlo - delta, xhi + delta, ylo - delta, yhi + delta])
+}
+
+/// Conservative range of tiles `[i0, i1] × [j0, j1]` (inclusive) a view-clipped
+/// polygon may touch: its [`tile_extent`], floored.
+pub fn polygon_tile_range(v: &View, poly: &Polygon) -> Option<(u32, u32, u32, u32)> {
+    let [x0, x1, y0, y1] = tile_extent(v, poly.vertices())?;
     let last = v.tiles - 1;
-    if !(xhi + delta >= 0.0
-        && yhi + delta >= 0.0
-        && xlo - delta <= v.tiles as f32
-        && ylo - delta <= v.tiles as f32)
-    {
+    if !(x1 >= 0.0 && y1 >= 0.0 && x0 <= v.tiles as f32 && y0 <= v.tiles as f32) {
         return None;
     }
     Some((
-        floor_index(xlo - delta, last),
-        floor_index(xhi + delta, last),
-        floor_index(ylo - delta, last),
-        floor_index(yhi + delta, last),
+        floor_index(x0, last),
+        floor_index(x1, last),
+        floor_index(y0, last),
+        floor_index(y1, last),
     ))
 }
 
