@@ -195,7 +195,7 @@
 use crate::Ads;
 use crate::intersect_lanes::{LANES, intersect_closest_lanes};
 use dirt_core::{RayStats, Traversal, ViewsKind};
-use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_of};
+use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_pair};
 use dirt_math::clip::{HalfSpace, Interval, ray_depth, ray_point, tile_extent, view_frustum};
 use dirt_math::dda::{child_order, dilation, hiz_width};
 use dirt_math::encode::ordered_to_f32;
@@ -1988,8 +1988,7 @@ impl<'s, 'a, const STATS: bool> RayState<'s, 'a, STATS> {
     ) {
         let sc = self.sc;
         let nb = sc.buckets;
-        let b0 = bucket_of(lo, zmin, zmax, nb);
-        let b1 = bucket_of(hi, zmin, zmax, nb);
+        let (b0, b1) = bucket_pair(lo, hi, zmin, zmax, nb);
         let ascending = vr.d[2] >= 0.0;
         let lists = &sc.ads.lists;
         let first = tile * nb as usize;

@@ -66,6 +66,50 @@ fn estimated(x: f32, range: f32, buckets: u32) -> u32 {
     k
 }
 
+/// `(bucket_of(lo, ..), bucket_of(hi, ..))`, the same two buckets. For up to
+/// [`COUNTED`] buckets both ends are counted together as lanes, the products
+/// `fl(j·range)` computed once for both (a walk takes a tile's bucket range
+/// so at every tile it searches).
+#[inline]
+pub fn bucket_pair(lo: f32, hi: f32, zmin: f32, zmax: f32, buckets: u32) -> (u32, u32) {
+    if buckets <= 1 {
+        return (0, 0);
+    }
+    if buckets > COUNTED {
+        return (
+            bucket_of(lo, zmin, zmax, buckets),
+            bucket_of(hi, zmin, zmax, buckets),
+        );
+    }
+    let range = zmax - zmin;
+    if !(range > 0.0) {
+        return (0, 0);
+    }
+    let b = buckets as f32;
+    let (x0, x1) = ((lo - zmin) * b, (hi - zmin) * b);
+    // `bucket_of` returns 0 for `x <= 0` and NaN without counting; counted,
+    // such an `x` is below every `fl(j·range) > 0` and compares false, so
+    // the count is 0 all the same.
+    if buckets <= 8 {
+        counted_pair::<8>(x0, x1, range, buckets)
+    } else {
+        counted_pair::<{ COUNTED as usize }>(x0, x1, range, buckets)
+    }
+}
+
+/// [`counted`] of `x0` and of `x1` (`buckets <= N`), over `N` lanes: lane
+/// `q` compares `fl((q + 1)·range)`, the same product as `counted`'s
+/// `j as f32 * range` for `j = q + 1` (an exact `f32`), and lanes from
+/// `buckets − 1` on count nothing.
+#[inline(always)]
+fn counted_pair<const N: usize>(x0: f32, x1: f32, range: f32, buckets: u32) -> (u32, u32) {
+    let p: [f32; N] = std::array::from_fn(|q| (q + 1) as f32 * range);
+    let live: [bool; N] = std::array::from_fn(|q| (q as u32) < buckets - 1);
+    let c0: [u32; N] = std::array::from_fn(|q| u32::from(live[q] & (p[q] <= x0)));
+    let c1: [u32; N] = std::array::from_fn(|q| u32::from(live[q] & (p[q] <= x1)));
+    (c0.iter().sum(), c1.iter().sum())
+}
+
 /// Inclusive bucket range covered by the depth interval `[z0, z1]` (`z0 <= z1`),
 /// or `None` when it misses `[zmin, zmax]`.
 #[inline]
@@ -73,10 +117,7 @@ pub fn bucket_range(z0: f32, z1: f32, zmin: f32, zmax: f32, buckets: u32) -> Opt
     if !(z1 >= zmin && z0 <= zmax) {
         return None;
     }
-    Some((
-        bucket_of(z0, zmin, zmax, buckets),
-        bucket_of(z1, zmin, zmax, buckets),
-    ))
+    Some(bucket_pair(z0, z1, zmin, zmax, buckets))
 }
 
 /// A depth no larger than any depth whose bucket is `>= k`: where the ray enters
@@ -168,6 +209,42 @@ mod tests {
             };
             prop_assume!(x > 0.0);
             prop_assert_eq!(counted(x, range, buckets), estimated(x, range, buckets));
+        }
+
+        /// Both ends at once are each end's own bucket, on any bits:
+        /// depths at and beside bucket boundaries, outside the bounds,
+        /// infinities and NaN, empty and flat bounds, every bucket count
+        /// either way of [`COUNTED`].
+        #[test]
+        fn a_pair_is_each_ends_bucket(zmin in prop_oneof![
+            4 => -100.0f32..100.0,
+            1 => any::<f32>(),
+        ], span in prop_oneof![
+            4 => 0.0f32..100.0,
+            1 => any::<f32>(),
+            1 => Just(f32::MIN_POSITIVE),
+        ], f in prop::array::uniform2(prop_oneof![
+            4 => -0.2f32..1.2,
+            1 => any::<f32>(),
+            1 => Just(f32::INFINITY),
+            1 => Just(f32::NEG_INFINITY),
+        ]), k in prop::array::uniform2(0u32..34), nudge in prop::array::uniform2(-2i32..3), buckets in 0u32..34) {
+            let zmax = zmin + span;
+            let nb = buckets.max(1) as f32;
+            // Each end either anywhere or on or beside a boundary zmin + k·span/B.
+            let at = |c: usize| {
+                if k[c] <= buckets {
+                    let edge = zmin + k[c] as f32 * (span / nb);
+                    f32::from_bits((edge.to_bits() as i32).wrapping_add(nudge[c]) as u32)
+                } else {
+                    zmin + f[c] * span
+                }
+            };
+            let (lo, hi) = (at(0), at(1));
+            prop_assert_eq!(
+                bucket_pair(lo, hi, zmin, zmax, buckets),
+                (bucket_of(lo, zmin, zmax, buckets), bucket_of(hi, zmin, zmax, buckets))
+            );
         }
 
         #[test]
