@@ -189,8 +189,9 @@ impl DirtCpu {
     }
 
     /// Bytes of the triangles' boxes kept beside the last build for its
-    /// traces: 0 until the rays traced on it, from more than one point,
-    /// number one for every 4 (triangle, view) pairs; then 32 bytes a pair
+    /// traces: 0 until the rays traced on it, but for those from the
+    /// centre of perspective views (a cube's, a single view's apex), number
+    /// one for every 4 (triangle, view) pairs; then 32 bytes a pair
     /// until the next build. A trace of such rays leaves out a listed
     /// triangle whose box misses the ray's segment in a tile.
     pub fn boxes_bytes(&self) -> usize {

@@ -239,10 +239,10 @@ fn moved(tris: &[Triangle]) -> Vec<Triangle> {
 }
 
 // `DirtCpu` keeps a build's triangle boxes across its traces: computed in
-// the trace whose rays, with those traced before it from more than one
-// point, number one for every 4 (triangle, view) pairs, not before; rays
-// from one point do not count; a new build drops them. The hits stay the
-// plain stage's throughout.
+// the trace whose rays, with those traced before it, number one for every 4
+// (triangle, view) pairs, not before; rays from the cube's centre do not
+// count (they skip little), rays from one point elsewhere do; a new build
+// drops them. The hits stay the plain stage's throughout.
 #[test]
 fn a_tracers_boxes_are_kept_once_its_traces_pay_and_dropped_by_a_build() {
     use dirt_core::Tracer;
@@ -267,14 +267,16 @@ fn a_tracers_boxes_are_kept_once_its_traces_pay_and_dropped_by_a_build() {
             assert_eq!(h.bits(), w.bits(), "ray {k} {:?}", rs[k]);
         }
     };
-    // From one point: never counted, however many.
-    let o = Vec3::new(0.05, 0.1, -0.02);
-    let one_point: Vec<Ray> = rays(2 * need, &tris, &mut rng)
-        .iter()
-        .map(|r| Ray::new(o, Vec3::from_array(r.dir), 0.0, f32::INFINITY))
-        .collect();
-    traced(&mut t, &one_point);
-    assert_eq!(t.boxes_bytes(), 0, "rays from one point");
+    // From the cube's centre: never counted, however many.
+    let from = |o: Vec3, rng: &mut Rng| -> Vec<Ray> {
+        rays(2 * need, &tris, rng)
+            .iter()
+            .map(|r| Ray::new(o, Vec3::from_array(r.dir), 0.0, f32::INFINITY))
+            .collect()
+    };
+    let centre = from(ads.views.center, &mut rng);
+    traced(&mut t, &centre);
+    assert_eq!(t.boxes_bytes(), 0, "rays from the cube's centre");
     // From many points: a third of the rays needed a trace, then the rest.
     let third = need / 3;
     let many = rays(need, &tris, &mut rng);
@@ -298,6 +300,20 @@ fn a_tracers_boxes_are_kept_once_its_traces_pay_and_dropped_by_a_build() {
         }
         assert_eq!(t.boxes_bytes(), kept);
     }
+    // From one point beside the centre: counted like rays from several.
+    t.build(&moved).expect("rebuild");
+    let beside = from(ads.views.center + Vec3::new(0.05, 0.1, -0.02), &mut rng);
+    let batch = &beside[..need];
+    let hits = t.trace(batch).expect("trace");
+    let (want, _) = plain(&ads, &moved, batch, Traversal::Linear);
+    for (k, (h, w)) in hits.iter().zip(&want).enumerate() {
+        assert_eq!(h.bits(), w.bits(), "from one point, ray {k} {:?}", batch[k]);
+    }
+    assert_eq!(
+        t.boxes_bytes(),
+        pairs * 32,
+        "{need} rays from one point pay"
+    );
 }
 
 // Rays from the apex of a single view that holds every triangle read each
