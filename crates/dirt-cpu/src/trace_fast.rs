@@ -142,7 +142,8 @@
 //!   statistics every listed triangle is tested, as the plain stage counts.
 //! - Without statistics, for a batch of rays that do not all start at the
 //!   centre of perspective views and number at least one for every
-//!   [`PAIRS_PER_RAY`] (triangle, view) pairs, every triangle's box in every view is computed first
+//!   [`PAIRS_PER_RAY`] (triangle, view) pairs, every triangle's box in
+//!   every view is computed first
 //!   ([`triangle_boxes`]: the range of each view-space coordinate of its
 //!   vertices, widened by twice the view's `eps`), and a listed triangle
 //!   whose box misses the box of the ray's segment in the tile (each
@@ -171,8 +172,8 @@
 //!   cornell's camera rays through two orthographic views (r16 B8) tested
 //!   23.0 listed triangles a ray without the boxes, 3.3 with them.
 //!   `DirtCpu` keeps the boxes across the traces of one build
-//!   ([`BoxCache`]): there the rays traced on the
-//!   build so far count towards paying for them, so that batches too small
+//!   ([`BoxCache`]): there the rays traced on the build so far count
+//!   towards paying for them, so that batches too small
 //!   to pay alone (`spheres`, 33,794 triangles, batches of 5,000 rays) read
 //!   them once their sum has paid (its trace, 1 thread: 998 → 880 ns a
 //!   ray; `2CylinderEngine` 1214 → 1103).
