@@ -59,6 +59,7 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         "renders.svg",
         "render_reference.png",
         "leave_out.csv",
+        "side.csv",
     ] {
         let p = dir.join(f);
         assert!(
@@ -137,6 +138,63 @@ fn quick_eval_writes_parsable_outputs_with_zero_dirt_error() {
         assert_eq!(&r[differ], "0", "the grid differs from brute force: {r:?}");
     }
     assert_eq!(peers.contains(&"embree"), cfg!(feature = "embree"));
+    // Side by side: both scenes against every peer in 2 alternated rounds,
+    // at the cost model's choice, DIRT's hits held to every bit.
+    let side = csv_rows(&dir.join("side.csv"));
+    let col = |name: &str| column(&side, name);
+    let mut side_peers: Vec<&str> = side[1..]
+        .iter()
+        .map(|r| r.get(col("peer")).unwrap_or(""))
+        .collect();
+    side_peers.sort_unstable();
+    side_peers.dedup();
+    assert!(side_peers.contains(&"obvhs"), "{side_peers:?}");
+    assert_eq!(side.len() - 1, 2 * 2 * side_peers.len(), "rows of side.csv");
+    for r in &side[1..] {
+        let choice = choices
+            .iter()
+            .find(|c| c["scene"].as_str() == Some(&r[col("scene")]))
+            .expect("a side row's scene has a choice");
+        assert_eq!(choice["setting"].as_str(), Some(&r[col("setting")]));
+        assert_eq!(
+            &r[col("dirt_differ")],
+            "0",
+            "DIRT differs from brute force: {r:?}"
+        );
+        let n = |c: &str| {
+            r[col(c)]
+                .parse::<f64>()
+                .unwrap_or_else(|_| panic!("{c}: {r:?}"))
+        };
+        // The peer's rounds judge the headline's rays as the headline does.
+        let headline = |c: usize| -> f64 {
+            traces[1..]
+                .iter()
+                .filter(|t| t[backend] == r[col("peer")] && t[scene] == r[col("scene")])
+                .map(|t| t[c].parse::<f64>().expect("a count"))
+                .sum()
+        };
+        assert_eq!(n("peer_differ"), headline(differ), "{r:?}");
+        assert_eq!(n("peer_compared"), headline(compared), "{r:?}");
+        assert!(n("peer_compared") > 0.0);
+        assert_eq!(
+            n("dirt_compared"),
+            2.0 * n("peer_compared"),
+            "both traversals"
+        );
+        for c in [
+            "dirt_build_ms",
+            "peer_build_ms",
+            "dirt_linear_ms",
+            "dirt_hiz_ms",
+            "peer_trace_ms",
+        ] {
+            assert!(n(c) > 0.0, "{c}: {r:?}");
+        }
+        // The order is swapped every round.
+        let first = &r[col("dirt_first")] == "true";
+        assert_eq!(first, &r[col("round")] == "0", "{r:?}");
+    }
     // The approximate methods: every setting of the quick sweep on both
     // scenes (cornell and foliage have cameras), every ray type, with the
     // error split into its kinds.

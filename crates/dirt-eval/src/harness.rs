@@ -91,6 +91,9 @@ pub struct EvalConfig {
     pub gpu: Option<GpuConfig>,
     /// The peers measured beside DIRT (default: [`crate::peers::available`]).
     pub peers: Vec<Peer>,
+    /// Alternated rounds of DIRT at the headline's setting beside each peer
+    /// ([`crate::side`]); 0 leaves them out.
+    pub side_rounds: u32,
     /// Densities (cells per triangle) of the compact grid measured besides
     /// the peer's ([`crate::peers::GRID`]): its knob, swept.
     pub grid_densities: Vec<f32>,
@@ -136,6 +139,7 @@ impl EvalConfig {
             repeat: 1,
             gpu: None,
             peers: crate::peers::available(),
+            side_rounds: 2,
             grid_densities: Vec::new(),
             approx: crate::approx::quick(),
             dynamic: Some(DynamicConfig {
@@ -200,6 +204,7 @@ impl EvalConfig {
                 rays: 2_000,
             }),
             peers: crate::peers::available(),
+            side_rounds: 5,
             grid_densities: vec![1.0, 2.0, 8.0],
             approx: crate::approx::sweep(),
             dynamic: Some(DynamicConfig {
@@ -334,6 +339,8 @@ pub struct EvalResults {
     pub choices: Vec<ChoiceRow>,
     /// Time and memory saved by leaving out what a scene does not need.
     pub leave_out: Vec<crate::leave_out::LeaveOutRow>,
+    /// DIRT at the headline's setting beside each peer, in alternated rounds.
+    pub side: Vec<crate::side::SideRow>,
     pub renders: Vec<RenderRow>,
     pub render_reference: Option<RenderReference>,
     pub render_settings_bounces: u32,
@@ -440,18 +447,12 @@ impl Prepared {
         }
     }
 
-    fn build_err(&self) -> impl FnOnce(CoreError) -> EvalError + '_ {
-        |source| EvalError::Build {
-            scene: self.name.clone(),
-            source,
-        }
+    fn build_err(&self) -> impl Fn(CoreError) -> EvalError + '_ {
+        EvalError::build_of(&self.name)
     }
 
-    fn trace_err(&self) -> impl FnOnce(CoreError) -> EvalError + '_ {
-        |source| EvalError::Trace {
-            scene: self.name.clone(),
-            source,
-        }
+    fn trace_err(&self) -> impl Fn(CoreError) -> EvalError + '_ {
+        EvalError::trace_of(&self.name)
     }
 }
 
@@ -537,6 +538,7 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
         + cfg.grid_densities.len()
         + cfg.approx.len()
         + usize::from(gpu.is_some())
+        + usize::from(cfg.side_rounds > 0)
         + 3;
     let dyn_steps = cfg.dynamic.map_or(0, |d| d.frames * d.ray_counts().len())
         + usize::from(cfg.render.is_some());
@@ -629,6 +631,25 @@ pub fn run(cfg: &EvalConfig) -> Result<EvalResults, EvalError> {
         for peer in &cfg.peers {
             pb.set_message(format!("{label}: {}", peer.name));
             measure_peer(&prep, peer, threads, cfg, &mut res)?;
+            pb.inc(1);
+        }
+        if cfg.side_rounds > 0 {
+            pb.set_message(format!("{label}: side by side"));
+            let input = crate::side::Input {
+                scene: &prep.name,
+                tris: &prep.tris,
+                rays: prep.rays.iter().map(|(_, r)| r.as_slice()).collect(),
+                truth: prep.truth.iter().map(Vec::as_slice).collect(),
+                params: point.params,
+                setting: point.label(),
+                traversals: &cfg.traversals,
+                repeat: cfg.repeat,
+                rounds: cfg.side_rounds,
+            };
+            for peer in &cfg.peers {
+                let rows = crate::side::run(&input, peer, threads, &mut res.notes)?;
+                res.side.extend(rows);
+            }
             pb.inc(1);
         }
         for &density in &cfg.grid_densities {

@@ -12,7 +12,7 @@
 //!   a frame of every ray of the run, every candidate built (the default,
 //!   `cost::auto`, prunes that ranking; its pick is the headline's setting), leaving out too.
 
-use dirt_core::{AdsParams, CoreError, Tracer, Traversal};
+use dirt_core::{AdsParams, Tracer, Traversal};
 use dirt_cpu::cost::{CostModel, candidates, choose};
 use dirt_cpu::{Ads, DirtCpu};
 use dirt_math::{Hit, Ray, Triangle, Vec3};
@@ -64,14 +64,10 @@ fn measure(
     all_views: bool,
 ) -> Result<LeaveOutRow, EvalError> {
     let scene = || input.scene.to_string();
-    let build_err = |source: CoreError| EvalError::Build {
-        scene: scene(),
-        source,
-    };
-    let trace_err = |source| EvalError::Trace {
-        scene: scene(),
-        source,
-    };
+    let (build_err, trace_err) = (
+        EvalError::build_of(input.scene),
+        EvalError::trace_of(input.scene),
+    );
     // `DirtCpu` builds with `Ads::build` only: time the build of either kind here.
     let (build_ms, ads) = measure::timed(input.repeat, || {
         if all_views {

@@ -17,7 +17,9 @@
 //!   trade, and the compact grid's density swept;
 //! * the per-frame cost (rebuild + trace) on a deforming scene ([`dynamic`]);
 //! * the image error (RMSE, FLIP) of path-traced renders against a converged
-//!   reference as samples accumulate, against wall time ([`renders`]).
+//!   reference as samples accumulate, against wall time ([`renders`]);
+//! * DIRT at the headline's setting beside each peer in alternated rounds,
+//!   whose ratios come with their spread ([`side`]).
 //!
 //! Every figure is taken by [`measure`], one measuring path over
 //! `&mut dyn dirt_core::Tracer` (DIRT on the CPU and GPU, brute force and the
@@ -28,7 +30,8 @@
 //! [`report`] writes CSV, JSON, Markdown and plots ([`plot`]).
 //!
 //! Imports go one way: [`harness`] uses [`dynamic`], [`leave_out`],
-//! [`renders`] and [`peers`], which use [`measure`] (a leaf), never the harness.
+//! [`renders`], [`side`] and [`peers`], which use [`measure`] (a leaf), never
+//! the harness.
 //!
 //! Thread counts: DIRT's CPU stages, brute force and the peers' traces run on
 //! rayon's global pool; Embree builds with the same number of threads; the
@@ -44,6 +47,7 @@ pub mod plot;
 pub mod rays;
 pub mod renders;
 pub mod report;
+pub mod side;
 
 pub use harness::{EvalConfig, EvalResults, run};
 
@@ -88,6 +92,24 @@ pub enum EvalError {
     Render(String),
     #[error("invalid configuration: {0}")]
     Config(String),
+}
+
+impl EvalError {
+    /// For `map_err`: a failed build of `scene`.
+    pub fn build_of(scene: &str) -> impl Fn(dirt_core::CoreError) -> EvalError + Copy + '_ {
+        move |source| EvalError::Build {
+            scene: scene.to_string(),
+            source,
+        }
+    }
+
+    /// For `map_err`: a failed trace of `scene`.
+    pub fn trace_of(scene: &str) -> impl Fn(dirt_core::CoreError) -> EvalError + Copy + '_ {
+        move |source| EvalError::Trace {
+            scene: scene.to_string(),
+            source,
+        }
+    }
 }
 
 /// How many of the compared rays differ from the truth, and how.

@@ -1,6 +1,7 @@
 //! Writes a run: `results.json` (everything), `builds.csv`, `traces.csv`,
-//! `dynamic.csv`, the SVG plots, and a Markdown summary (`summary.md`, and
-//! the same text at another path such as `docs/RESULTS.md`).
+//! `dynamic.csv`, `renders.csv`, `leave_out.csv`, `side.csv`, the SVG
+//! plots, and a Markdown summary (`summary.md`, and the same text at
+//! another path such as `docs/RESULTS.md`).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -11,6 +12,8 @@ use crate::dynamic::medians;
 use crate::harness::EvalResults;
 use crate::measure::{BuildRow, TraceRow, median, mrays};
 use crate::plot::{self, Plot};
+use crate::side::{SideRow, Spread};
+use dirt_core::Traversal;
 
 mod approx;
 
@@ -70,6 +73,7 @@ pub fn write_all(
             "leave_out.csv",
             write_csv(&dir.join("leave_out.csv"), &res.leave_out),
         ),
+        ("side.csv", write_csv(&dir.join("side.csv"), &res.side)),
     ];
     for (name, written) in csvs {
         written?;
@@ -322,6 +326,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         let _ = writeln!(s);
     }
     let _ = writeln!(s);
+    side_table(&mut s, res);
     fixed_default_table(&mut s, res, &peers);
     let mut runs: Vec<(&str, usize)> = res
         .dynamic
@@ -402,15 +407,19 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
         .filter(|t| t.backend.starts_with("dirt") && exact(&t.setting))
         .map(|t| t.compared)
         .sum();
-    if dirt_bad.is_empty() && dyn_bad == 0 {
+    // The side-by-side rounds trace the headline's settings, exact all.
+    let side_bad: usize = res.side.iter().map(|r| r.dirt_differ).sum();
+    let side_compared: usize = res.side.iter().map(|r| r.dirt_compared).sum();
+    if dirt_bad.is_empty() && dyn_bad == 0 && side_bad == 0 {
         let _ = writeln!(
             s,
-            "**DIRT: 0 rays differ** from brute force in any bit, over {dirt_compared} compared ray traces of every exact setting, traversal, ray type and backend (and every frame of the dynamic scene).\n"
+            "**DIRT: 0 rays differ** from brute force in any bit, over {} compared ray traces of every exact setting, traversal, ray type and backend (and every frame of the dynamic scene, and every side-by-side round).\n",
+            dirt_compared + side_compared
         );
     } else {
         let _ = writeln!(
             s,
-            "**DEFECT: DIRT differs from brute force** on {} (setting, traversal, ray type) rows and {dyn_bad} dynamic-scene rays. The rows:\n",
+            "**DEFECT: DIRT differs from brute force** on {} (setting, traversal, ray type) rows, {dyn_bad} dynamic-scene rays and {side_bad} ray traces of the side-by-side rounds. The rows:\n",
             dirt_bad.len()
         );
         let _ = writeln!(
@@ -723,7 +732,7 @@ pub fn markdown(res: &EvalResults, plots: &[Plot], prefix: &str) -> String {
     }
     let _ = writeln!(
         s,
-        "Raw data: [results.json]({prefix}results.json), [builds.csv]({prefix}builds.csv), [traces.csv]({prefix}traces.csv), [dynamic.csv]({prefix}dynamic.csv), [renders.csv]({prefix}renders.csv)."
+        "Raw data: [results.json]({prefix}results.json), [builds.csv]({prefix}builds.csv), [traces.csv]({prefix}traces.csv), [dynamic.csv]({prefix}dynamic.csv), [renders.csv]({prefix}renders.csv), [leave_out.csv]({prefix}leave_out.csv), [side.csv]({prefix}side.csv)."
     );
     s
 }
@@ -761,8 +770,11 @@ fn median_of(runs: &[f64]) -> Option<f64> {
 /// left out.
 fn goals_table(s: &mut String, res: &EvalResults) {
     let mut rows: Vec<(String, String, String, &str)> = Vec::new();
+    // Per row, the side-by-side rounds' reading of the same ratio.
+    let mut side: Vec<String> = Vec::new();
     let met = |x: f64, goal: f64| if x <= goal { "yes" } else { "no" };
     for sc in &res.scenes {
+        let rounds = || side_rounds(res, &sc.name, "embree");
         let setting = chosen_setting(res, &sc.name);
         let (lin, _) = trace_totals(res, &sc.name, "dirt-cpu", setting, "linear");
         let (hiz, _) = trace_totals(res, &sc.name, "dirt-cpu", setting, "hiz");
@@ -775,6 +787,9 @@ fn goals_table(s: &mut String, res: &EvalResults) {
                 format!("{} / {}", f(l), f(h)),
                 met(l.min(h), TRACE_GOAL),
             ));
+            side.push(spread(Spread::of(
+                rounds().filter_map(SideRow::faster_ratio),
+            )));
         }
         let db = build_ms(res, &sc.name, "dirt-cpu", setting);
         if let (Some(d), Some(e)) = (db, build_ms(res, &sc.name, "embree", "")) {
@@ -793,6 +808,7 @@ fn goals_table(s: &mut String, res: &EvalResults) {
                     met(d / e, BUILD_GOAL)
                 },
             ));
+            side.push(spread(Spread::of(rounds().map(SideRow::build_ratio))));
         }
     }
     let mut counts: Vec<usize> = res
@@ -889,9 +905,93 @@ fn goals_table(s: &mut String, res: &EvalResults) {
         s,
         "What DIRT on the CPU aims for beside its peers, and what this run measured (from the tables below; ratios are DIRT / peer, above 1 means DIRT is slower). A trace goal counts as met when the faster traversal meets it: the command line times both on a sample and keeps the faster.\n"
     );
-    let _ = writeln!(s, "| figure | goal | measured | met |\n|---|---|---:|---|");
-    for (what, goal, measured, met) in rows {
-        let _ = writeln!(s, "| {what} | {goal} | {measured} | {met} |");
+    if res.side.is_empty() {
+        let _ = writeln!(s, "| figure | goal | measured | met |\n|---|---|---:|---|");
+        for (what, goal, measured, met) in rows {
+            let _ = writeln!(s, "| {what} | {goal} | {measured} | {met} |");
+        }
+    } else {
+        let _ = writeln!(
+            s,
+            "`side by side` reads the same ratio from the alternated rounds of the section of that name (trace: DIRT's faster traversal in each round): the median of the rounds, then their least and greatest. Where it and `measured` fall on either side of a goal, the machine's drift during the run decided `met`.\n"
+        );
+        let _ = writeln!(
+            s,
+            "| figure | goal | measured | met | side by side |\n|---|---|---:|---|---:|"
+        );
+        for (k, (what, goal, measured, met)) in rows.into_iter().enumerate() {
+            let sd = side.get(k).map_or("–", String::as_str);
+            let _ = writeln!(s, "| {what} | {goal} | {measured} | {met} | {sd} |");
+        }
+    }
+    let _ = writeln!(s);
+}
+
+/// A [`Spread`] as `median (min–max)`; `–` for none.
+fn spread(sp: Option<Spread>) -> String {
+    sp.map_or_else(
+        || "–".to_string(),
+        |sp| format!("{} ({}–{})", f(sp.median), f(sp.min), f(sp.max)),
+    )
+}
+
+/// The side-by-side rounds of `scene` against `peer`.
+fn side_rounds<'a>(
+    res: &'a EvalResults,
+    scene: &'a str,
+    peer: &'a str,
+) -> impl Iterator<Item = &'a SideRow> {
+    res.side
+        .iter()
+        .filter(move |r| r.scene == scene && r.peer == peer)
+}
+
+/// "## Side by side": per scene and peer, the ratios of the alternated
+/// rounds ([`crate::side`]) as median (least–greatest), and the hits
+/// compared in them.
+fn side_table(s: &mut String, res: &EvalResults) {
+    if res.side.is_empty() {
+        return;
+    }
+    let rounds = res.side.iter().map(|r| r.round + 1).max().unwrap_or(0);
+    let _ = writeln!(s, "## Side by side\n");
+    let _ = writeln!(
+        s,
+        "DIRT at the headline's setting and each peer in {rounds} alternated rounds (`dirt_eval::side`): each round builds both, then traces each ray type through one and then the other (DIRT with each traversal), the order swapped every round; each build and trace is measured as in the headline. The table above measures each backend in turn, up to minutes apart; here a ratio's two times were taken within a second of each other, and the range over the rounds shows how far the machine's speed moved it. Ratios are DIRT / peer: the median of the rounds (least–greatest). `differ` counts, over all rounds, the compared rays whose hit differs from brute force (DIRT: any bit, every traversal; the peer as in the headline).\n"
+    );
+    let _ = writeln!(
+        s,
+        "| scene | peer | DIRT setting | rounds | build dirt/peer | trace dirt/peer, linear | trace dirt/peer, hiz | DIRT differ / compared | peer differ / compared |\n|---|---|---|---:|---:|---:|---:|---:|---:|"
+    );
+    let mut keys: Vec<(&str, &str)> = Vec::new();
+    for r in &res.side {
+        if !keys.contains(&(r.scene.as_str(), r.peer.as_str())) {
+            keys.push((&r.scene, &r.peer));
+        }
+    }
+    for (scene, peer) in keys {
+        let rows: Vec<&SideRow> = side_rounds(res, scene, peer).collect();
+        let Some(first) = rows.first() else {
+            continue;
+        };
+        let sum = |f: fn(&SideRow) -> usize| rows.iter().map(|r| f(r)).sum::<usize>();
+        let _ = writeln!(
+            s,
+            "| {scene} | {peer} | {} | {} | {} | {} | {} | {} / {} | {} / {} |",
+            first.setting,
+            rows.len(),
+            spread(Spread::of(rows.iter().map(|r| r.build_ratio()))),
+            spread(Spread::of(
+                rows.iter().filter_map(|r| r.trace_ratio(Traversal::Linear))
+            )),
+            spread(Spread::of(
+                rows.iter().filter_map(|r| r.trace_ratio(Traversal::HiZ))
+            )),
+            sum(|r| r.dirt_differ),
+            sum(|r| r.dirt_compared),
+            sum(|r| r.peer_differ),
+            sum(|r| r.peer_compared),
+        );
     }
     let _ = writeln!(s);
 }

@@ -49,6 +49,9 @@ pub struct EvalArgs {
     /// Skip the whole `dirt trace` processes on the large scene (not run with --quick).
     #[arg(long)]
     no_processes: bool,
+    /// Alternated rounds of DIRT beside each peer (default 5; --quick: 2; 0 leaves them out).
+    #[arg(long, value_name = "N")]
+    side_rounds: Option<u32>,
     /// Frames of the deforming scene.
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
@@ -117,6 +120,9 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     }
     if let Some(k) = args.repeat {
         cfg.repeat = k;
+    }
+    if let Some(n) = args.side_rounds {
+        cfg.side_rounds = n;
     }
     if args.no_gpu {
         cfg.gpu = None;
