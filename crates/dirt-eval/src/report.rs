@@ -769,9 +769,9 @@ fn median_of(runs: &[f64]) -> Option<f64> {
 /// whose figures the run lacks (a peer unavailable, a part skipped) are
 /// left out.
 fn goals_table(s: &mut String, res: &EvalResults) {
-    let mut rows: Vec<(String, String, String, &str)> = Vec::new();
-    // Per row, the side-by-side rounds' reading of the same ratio.
-    let mut side: Vec<String> = Vec::new();
+    // (figure, goal, measured, met, the side-by-side rounds' reading of the
+    // same ratio)
+    let mut rows: Vec<(String, String, String, &str, String)> = Vec::new();
     let met = |x: f64, goal: f64| if x <= goal { "yes" } else { "no" };
     for sc in &res.scenes {
         let rounds = || side_rounds(res, &sc.name, "embree");
@@ -786,10 +786,8 @@ fn goals_table(s: &mut String, res: &EvalResults) {
                 format!("≤ {TRACE_GOAL}"),
                 format!("{} / {}", f(l), f(h)),
                 met(l.min(h), TRACE_GOAL),
+                spread(Spread::of(rounds().filter_map(SideRow::faster_ratio))),
             ));
-            side.push(spread(Spread::of(
-                rounds().filter_map(SideRow::faster_ratio),
-            )));
         }
         let db = build_ms(res, &sc.name, "dirt-cpu", setting);
         if let (Some(d), Some(e)) = (db, build_ms(res, &sc.name, "embree", "")) {
@@ -807,8 +805,8 @@ fn goals_table(s: &mut String, res: &EvalResults) {
                 } else {
                     met(d / e, BUILD_GOAL)
                 },
+                spread(Spread::of(rounds().map(SideRow::build_ratio))),
             ));
-            side.push(spread(Spread::of(rounds().map(SideRow::build_ratio))));
         }
     }
     let mut counts: Vec<usize> = res
@@ -852,6 +850,7 @@ fn goals_table(s: &mut String, res: &EvalResults) {
                 format!("≤ {goal}"),
                 f(d / p),
                 met(d / p, goal),
+                "–".into(),
             ));
         }
     }
@@ -876,6 +875,7 @@ fn goals_table(s: &mut String, res: &EvalResults) {
             format!("≤ {RENDER_GOAL}"),
             f(x),
             met(x, RENDER_GOAL),
+            "–".into(),
         ));
     }
     let process = |backend: &str| {
@@ -895,6 +895,7 @@ fn goals_table(s: &mut String, res: &EvalResults) {
             format!("≤ {PROCESS_GOAL}"),
             f(d / e),
             met(d / e, PROCESS_GOAL),
+            "–".into(),
         ));
     }
     if rows.is_empty() {
@@ -907,7 +908,7 @@ fn goals_table(s: &mut String, res: &EvalResults) {
     );
     if res.side.is_empty() {
         let _ = writeln!(s, "| figure | goal | measured | met |\n|---|---|---:|---|");
-        for (what, goal, measured, met) in rows {
+        for (what, goal, measured, met, _) in rows {
             let _ = writeln!(s, "| {what} | {goal} | {measured} | {met} |");
         }
     } else {
@@ -919,8 +920,7 @@ fn goals_table(s: &mut String, res: &EvalResults) {
             s,
             "| figure | goal | measured | met | side by side |\n|---|---|---:|---|---:|"
         );
-        for (k, (what, goal, measured, met)) in rows.into_iter().enumerate() {
-            let sd = side.get(k).map_or("–", String::as_str);
+        for (what, goal, measured, met, sd) in rows {
             let _ = writeln!(s, "| {what} | {goal} | {measured} | {met} | {sd} |");
         }
     }
@@ -957,7 +957,7 @@ fn side_table(s: &mut String, res: &EvalResults) {
     let _ = writeln!(s, "## Side by side\n");
     let _ = writeln!(
         s,
-        "DIRT at the headline's setting and each peer in {rounds} alternated rounds (`dirt_eval::side`): each round builds both, then traces each ray type through one and then the other (DIRT with each traversal), the order swapped every round; each build and trace is measured as in the headline. The table above measures each backend in turn, up to minutes apart; here a ratio's two times were taken within a second of each other, and the range over the rounds shows how far the machine's speed moved it. Ratios are DIRT / peer: the median of the rounds (least–greatest). `differ` counts, over all rounds, the compared rays whose hit differs from brute force (DIRT: any bit, every traversal; the peer as in the headline).\n"
+        "DIRT at the headline's setting and each peer in {rounds} alternated rounds (`dirt_eval::side`): each round builds both, then traces every ray type through one and then through the other (DIRT with each traversal), the order swapped every round; each build and trace is measured as in the headline. The table above measures each backend in turn, up to minutes apart; here a ratio's two times were taken within a second of each other, and the range over the rounds shows how far the machine's speed moved it. Ratios are DIRT / peer: the median of the rounds (least–greatest). `differ` counts, over all rounds, the compared rays whose hit differs from brute force (DIRT: any bit, every traversal; the peer as in the headline).\n"
     );
     let _ = writeln!(
         s,

@@ -6,8 +6,8 @@
 //! apart, and on a shared machine the speed of the cores drifts over that
 //! time (a peer's trace has read 1.5 times faster in one run than in the
 //! next, with nothing changed). Here each round builds DIRT and the peer,
-//! then traces each ray type through one and then the other (DIRT with each
-//! traversal), their order swapped every round; a round gives one ratio of
+//! then traces every ray type through one and then through the other (DIRT
+//! with each traversal), their order swapped every round; a round gives one ratio of
 //! each kind, and the report gives their median and their range over the
 //! rounds. The hits of every round are compared with brute force's, as in
 //! the headline.
@@ -157,40 +157,36 @@ pub fn run(
     let mut rows = Vec::new();
     for round in 0..input.rounds {
         let dirt_first = round % 2 == 0;
-        // Builds, in this round's order.
-        let mut build = |dirt_turn: bool| -> Result<f64, CoreError> {
-            let t: &mut dyn Tracer = if dirt_turn { &mut dirt } else { other.as_mut() };
-            Ok(measure::build(t, input.tris, input.repeat)?.build_ms)
-        };
-        let (d_build, p_build) = if dirt_first {
-            let d = build(true).map_err(build_err)?;
-            (d, build(false).map_err(build_err)?)
-        } else {
-            let p = build(false).map_err(build_err)?;
-            (build(true).map_err(build_err)?, p)
-        };
-        // Traces, each traversal of DIRT beside the peer's, in this round's order.
+        // DIRT first (true) or the peer first, builds and traces alike.
+        let order = [dirt_first, !dirt_first];
+        let (mut d_build, mut p_build) = (0.0, 0.0);
+        for dirt_turn in order {
+            if dirt_turn {
+                d_build = measure::build(&mut dirt, input.tris, input.repeat)
+                    .map_err(build_err)?
+                    .build_ms;
+            } else {
+                p_build = measure::build(other.as_mut(), input.tris, input.repeat)
+                    .map_err(build_err)?
+                    .build_ms;
+            }
+        }
         let mut dirt_ms = [None, None];
-        let (mut peer_ms, mut peer_differ, mut peer_compared) = (0.0, 0, 0);
         let (mut dirt_differ, mut dirt_compared) = (0, 0);
-        let mut peer_trace = |ms: &mut f64, differ: &mut usize| -> Result<usize, EvalError> {
-            let (t, d, c) = trace_all(other.as_mut(), input, peer.how()).map_err(trace_err)?;
-            *ms = t;
-            *differ = d;
-            Ok(c)
-        };
-        if !dirt_first {
-            peer_compared = peer_trace(&mut peer_ms, &mut peer_differ)?;
-        }
-        for &trav in input.traversals {
-            dirt.traversal = trav;
-            let (t, d, c) = trace_all(&mut dirt, input, Match::Bits).map_err(trace_err)?;
-            dirt_ms[usize::from(trav == Traversal::HiZ)] = Some(t);
-            dirt_differ += d;
-            dirt_compared += c;
-        }
-        if dirt_first {
-            peer_compared = peer_trace(&mut peer_ms, &mut peer_differ)?;
+        let (mut peer_ms, mut peer_differ, mut peer_compared) = (0.0, 0, 0);
+        for dirt_turn in order {
+            if dirt_turn {
+                for &trav in input.traversals {
+                    dirt.traversal = trav;
+                    let (t, d, c) = trace_all(&mut dirt, input, Match::Bits).map_err(trace_err)?;
+                    dirt_ms[usize::from(trav == Traversal::HiZ)] = Some(t);
+                    dirt_differ += d;
+                    dirt_compared += c;
+                }
+            } else {
+                (peer_ms, peer_differ, peer_compared) =
+                    trace_all(other.as_mut(), input, peer.how()).map_err(trace_err)?;
+            }
         }
         rows.push(SideRow {
             scene: scene(),
