@@ -2558,6 +2558,7 @@ mod tests {
         );
         assert!(margin(Apex::of(v, sc.content[0][0], false)) < margin(Apex::of(v, 0.0, false)));
     }
+
     /// In an orthographic view whose content is a strip of the image, a
     /// ray's interval is cut to the strip's tiles: every point of it in a
     /// tile with content, at a depth within `eps` of the content's, stays,
