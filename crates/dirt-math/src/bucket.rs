@@ -89,11 +89,14 @@ pub fn bucket_pair(lo: f32, hi: f32, zmin: f32, zmax: f32, buckets: u32) -> (u32
     let (x0, x1) = ((lo - zmin) * b, (hi - zmin) * b);
     // `bucket_of` returns 0 for `x <= 0` and NaN without counting; counted,
     // such an `x` is below every `fl(j·range) > 0` and compares false, so
-    // the count is 0 all the same.
-    if buckets <= 8 {
-        counted_pair::<8>(x0, x1, range, buckets)
-    } else {
-        counted_pair::<{ COUNTED as usize }>(x0, x1, range, buckets)
+    // the count is 0 all the same. As few lanes as the count needs: with
+    // one for two buckets, not eight, the deforming grid's build (single
+    // r128 B2, 1 thread) took 51.8 M -> 47.4 M instructions.
+    match buckets {
+        2 => counted_pair::<1>(x0, x1, range, buckets),
+        3..=4 => counted_pair::<4>(x0, x1, range, buckets),
+        5..=8 => counted_pair::<8>(x0, x1, range, buckets),
+        _ => counted_pair::<{ COUNTED as usize }>(x0, x1, range, buckets),
     }
 }
 
@@ -103,11 +106,16 @@ pub fn bucket_pair(lo: f32, hi: f32, zmin: f32, zmax: f32, buckets: u32) -> (u32
 /// `buckets − 1` on count nothing.
 #[inline(always)]
 fn counted_pair<const N: usize>(x0: f32, x1: f32, range: f32, buckets: u32) -> (u32, u32) {
-    let p: [f32; N] = std::array::from_fn(|q| (q + 1) as f32 * range);
-    let live: [bool; N] = std::array::from_fn(|q| (q as u32) < buckets - 1);
-    let c0: [u32; N] = std::array::from_fn(|q| u32::from(live[q] & (p[q] <= x0)));
-    let c1: [u32; N] = std::array::from_fn(|q| u32::from(live[q] & (p[q] <= x1)));
-    (c0.iter().sum(), c1.iter().sum())
+    // Plain loops over `N`, unrolled: `array::from_fn` was left out of
+    // line once `bucket_pair` had several `N`.
+    let (mut c0, mut c1) = (0, 0);
+    for q in 0..N {
+        let p = (q + 1) as f32 * range;
+        let live = (q as u32) < buckets - 1;
+        c0 += u32::from(live & (p <= x0));
+        c1 += u32::from(live & (p <= x1));
+    }
+    (c0, c1)
 }
 
 /// Inclusive bucket range covered by the depth interval `[z0, z1]` (`z0 <= z1`),
