@@ -34,6 +34,7 @@
 //! [`polygon_tile_range`]: dirt_math::clip::polygon_tile_range
 
 use crate::fill_depth::for_each_fragment;
+use crate::trace_fast::{ViewBox, image_box};
 use dirt_math::clip::{HalfSpace, Polygon, cover_tiles, for_each_covered_tile, view_frustum};
 use dirt_math::num::{floor_index, fmax, fmin};
 use dirt_math::{Triangle, View, ViewSet};
@@ -86,6 +87,10 @@ fn eval_lanes(h: &HalfSpace, p: &[L; 3], eps: f32) -> L {
 /// vertices into `tv` (written in place: returned, they were copied). With
 /// `inside`, also clears the lanes that may not lie inside the frustum
 /// shrunk by `eps` (every vertex inside every plane: the frustum is convex).
+/// Returns each lane's [`tile_extent`] of the unclipped triangle,
+/// `[x0, x1, y0, y1]` (its bits: the values the range is floored from).
+///
+/// [`tile_extent`]: dirt_math::clip::tile_extent
 #[inline(always)]
 fn cover_lanes(
     v: &View,
@@ -93,7 +98,7 @@ fn cover_lanes(
     covers: &mut [Cover; LANES],
     tv: &mut [[L; 3]; 3],
     mut inside: Option<&mut [bool; LANES]>,
-) {
+) -> [L; 4] {
     // View::to_view: q = p - apex, then dot3 with right, up, forward.
     let apex = v.apex.to_array();
     for (tv, tri) in tv.iter_mut().zip(tri) {
@@ -160,10 +165,16 @@ fn cover_lanes(
             && xlo[k] - d[k] <= tiles
             && ylo[k] - d[k] <= tiles
     });
-    let i0: [u32; LANES] = from_fn(|k| floor_index(xlo[k] - d[k], last));
-    let i1: [u32; LANES] = from_fn(|k| floor_index(xhi[k] + d[k], last));
-    let j0: [u32; LANES] = from_fn(|k| floor_index(ylo[k] - d[k], last));
-    let j1: [u32; LANES] = from_fn(|k| floor_index(yhi[k] + d[k], last));
+    let extent: [L; 4] = [
+        from_fn(|k| xlo[k] - d[k]),
+        from_fn(|k| xhi[k] + d[k]),
+        from_fn(|k| ylo[k] - d[k]),
+        from_fn(|k| yhi[k] + d[k]),
+    ];
+    let i0: [u32; LANES] = from_fn(|k| floor_index(extent[0][k], last));
+    let i1: [u32; LANES] = from_fn(|k| floor_index(extent[1][k], last));
+    let j0: [u32; LANES] = from_fn(|k| floor_index(extent[2][k], last));
+    let j1: [u32; LANES] = from_fn(|k| floor_index(extent[3][k], last));
     // A loop, not `from_fn`: that closure was left out of line.
     for (k, cover) in covers.iter_mut().enumerate() {
         let (i0, i1, j0, j1) = (i0[k], i1[k], j0[k], j1[k]);
@@ -187,6 +198,7 @@ fn cover_lanes(
             Cover::Range(i0, i1, j0, j1)
         };
     }
+    extent
 }
 
 /// [`cover_tiles`] on a range of two tiles for lane `k`: the lower tile
@@ -261,12 +273,21 @@ fn two_tiles(
 /// was found inside that view's frustum shrunk by its `eps` (`false` may
 /// also mean one lies within a few `eps` of a plane); `false` for any
 /// other set (not computed).
+///
+/// With `images` (as long as `tris`) and a set whose one view with content
+/// is a perspective view, also writes each triangle's box in that view's
+/// image ([`image_box`], what [`apex_boxes`] computes) from the lanes'
+/// values, at the cost of the stores: the trace of rays from the view's
+/// apex leaves out the listed triangles whose box misses the ray's.
+///
+/// [`apex_boxes`]: crate::trace_fast::apex_boxes
 pub(crate) fn for_each_fragment_in<S>(
     set: &ViewSet,
     tris: &[Triangle],
     state: &mut S,
     mut item: impl FnMut(&mut S, usize, f32, f32),
     mut end: impl FnMut(&mut S),
+    mut images: Option<&mut [ViewBox]>,
 ) -> bool {
     let views: Vec<&View> = set.views.iter().filter(|v| v.has_content).collect();
     if views.len() > MAX_VIEWS {
@@ -277,16 +298,33 @@ pub(crate) fn for_each_fragment_in<S>(
         return false;
     }
     let one = views.len() == 1;
+    if !one || views[0].ortho {
+        images = None;
+    }
     let mut inside = [one; LANES];
     let mut covers = [[Cover::Nothing; LANES]; MAX_VIEWS];
     let mut tvs = [[[[0.0; LANES]; 3]; 3]; MAX_VIEWS];
-    for group in tris.chunks(LANES) {
+    for (g, group) in tris.chunks(LANES).enumerate() {
         // Lanes past the group's triangles repeat its last; they are not used.
         let tri: [[L; 3]; 3] =
             from_fn(|n| from_fn(|c| from_fn(|k| group[k.min(group.len() - 1)].v[n][c])));
         for (f, v) in views.iter().enumerate() {
             let inside = one.then_some(&mut inside);
-            cover_lanes(v, &tri, &mut covers[f], &mut tvs[f], inside);
+            let extent = cover_lanes(v, &tri, &mut covers[f], &mut tvs[f], inside);
+            if let Some(images) = images.as_deref_mut() {
+                // image_box's tests, side by side.
+                let z = |n: usize| tvs[f][n][2];
+                let half = v.near * 0.5;
+                let boxed: [bool; LANES] = from_fn(|k| {
+                    (z(0)[k] > half)
+                        & (z(1)[k] > half)
+                        & (z(2)[k] > half)
+                        & extent.iter().all(|e| !e[k].is_nan())
+                });
+                for (k, b) in images[g * LANES..][..group.len()].iter_mut().enumerate() {
+                    *b = image_box(boxed[k], from_fn(|e| extent[e][k]));
+                }
+            }
         }
         for k in 0..group.len() {
             for (f, v) in views.iter().enumerate() {
@@ -392,16 +430,25 @@ mod tests {
 
     /// [`lanes`], and whether they found every triangle inside the views.
     fn lanes_inside(views: &ViewSet, tris: &[Triangle]) -> (Walk, bool) {
+        let (walk, inside, _) = lanes_imaging(views, tris);
+        (walk, inside)
+    }
+
+    /// [`lanes_inside`], asking for the image boxes too (left
+    /// [`ViewBox::WHOLE`] where none are made).
+    fn lanes_imaging(views: &ViewSet, tris: &[Triangle]) -> (Walk, bool, Vec<ViewBox>) {
         let mut got = (Walk::new(), 0usize);
+        let mut images = vec![ViewBox::WHOLE; tris.len()];
         let inside = for_each_fragment_in(
             views,
             tris,
             &mut got,
             |(w, t), tile, lo, hi| w.push((*t, tile, lo.to_bits(), hi.to_bits())),
             |(_, t)| *t += 1,
+            Some(&mut images),
         );
         assert_eq!(got.1, tris.len(), "one end a triangle");
-        (got.0, inside)
+        (got.0, inside, images)
     }
 
     /// Whether every vertex lies inside every plane of the one view with
@@ -443,8 +490,16 @@ mod tests {
             centre in (-0.5f32..0.5, -0.5f32..0.5, -0.5f32..0.5),
         ) {
             let views = view_set(kind, tiles, Vec3::new(centre.0, centre.1, centre.2));
-            let (walk, inside) = lanes_inside(&views, &tris);
+            let (walk, inside, images) = lanes_imaging(&views, &tris);
             prop_assert_eq!(walk, plain(&views, &tris));
+            // Image boxes: apex_boxes' bits for a set whose one view with
+            // content is a perspective view, none made for other sets.
+            let with: Vec<&View> = views.views.iter().filter(|v| v.has_content).collect();
+            let want = match &with[..] {
+                [v] if !v.ortho => crate::trace_fast::apex_boxes(v, &tris),
+                _ => vec![ViewBox::WHOLE; tris.len()],
+            };
+            prop_assert_eq!(format!("{images:?}"), format!("{want:?}"));
             // Found inside only where it is, and only for a set of one view.
             prop_assert!(!inside || plain_inside(&views, &tris));
             prop_assert!(!inside || views.slots() == 1);

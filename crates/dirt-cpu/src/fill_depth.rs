@@ -14,6 +14,7 @@
 
 use crate::blocks::{Budget, Groups};
 use crate::cover_lanes::for_each_fragment_in;
+use crate::trace_fast::ViewBox;
 use dirt_math::clip::for_each_covered_tile;
 use dirt_math::encode::{ORDERED_NEG_INF, ORDERED_POS_INF, f32_to_ordered};
 use dirt_math::{Triangle, ViewSet};
@@ -66,6 +67,10 @@ pub struct Fragments {
     /// inside its frustum shrunk by its `eps`, so that the view sees all
     /// of the scene; `false` for other sets.
     pub(crate) inside: bool,
+    /// Where asked for ([`fill_depth_imaging`]) and the set's one view with
+    /// content is a perspective view: every triangle's box in its image,
+    /// found as the triangles were covered. Else empty.
+    pub(crate) images: Vec<ViewBox>,
 }
 
 /// Depth bounds of every tile of every view, encoded.
@@ -81,6 +86,27 @@ pub fn fill_depth_keeping(
     tris: &[Triangle],
     keep_max: usize,
 ) -> (Vec<[u32; 2]>, Fragments) {
+    fill_depth_imaging(views, tris, keep_max, false)
+}
+
+/// [`fill_depth_keeping`], with `images` also each triangle's box in the
+/// image of a set whose one view with content is a perspective view
+/// ([`Fragments::images`]; the trace of rays from its apex reads them).
+pub(crate) fn fill_depth_imaging(
+    views: &ViewSet,
+    tris: &[Triangle],
+    keep_max: usize,
+    images: bool,
+) -> (Vec<[u32; 2]>, Fragments) {
+    let imaged = images && {
+        let mut with = views.views.iter().filter(|v| v.has_content);
+        matches!((with.next(), with.next()), (Some(v), None) if !v.ortho)
+    };
+    let mut image = if imaged {
+        vec![ViewBox::WHOLE; tris.len()]
+    } else {
+        Vec::new()
+    };
     let per_view = views.views.first().map_or(0, |v| v.tile_count());
     let total = views.slots() * per_view;
     let bounds: Vec<[AtomicU32; 2]> = (0..total)
@@ -99,14 +125,21 @@ pub fn fill_depth_keeping(
         0
     };
     let budget = Budget::new(keep_max.min(ceiling));
+    // Each piece writes its triangles' image boxes, if any are made.
+    let image_pieces: Vec<Option<&mut [ViewBox]>> = if imaged {
+        image.chunks_mut(PIECE).map(Some).collect()
+    } else {
+        (0..tris.len().div_ceil(PIECE)).map(|_| None).collect()
+    };
     let (pieces, inside): (Vec<_>, Vec<bool>) = tris
         .par_chunks(PIECE)
+        .zip(image_pieces)
         // A task a piece: pieces differ in cost (large triangles cover many
         // tiles), and halves split only as rayon sees fit were left uneven
         // on the two threads (2CylinderEngine's fill_depth 10.6 -> 12.1 ms
         // when the build runs in the pool, as `Ads::build` runs it).
         .with_max_len(1)
-        .map(|piece| {
+        .map(|(piece, images)| {
             // What is left of the budget; a piece that would take more keeps
             // nothing (and frees what it took at once: with each piece in
             // flight bounded by the budget, this stage's peak stays below
@@ -145,6 +178,7 @@ pub fn fill_depth_keeping(
                         found.close();
                     }
                 },
+                images,
             );
             let (seen, keep, found) = st;
             // Every fragment becomes at least one list node of 4 bytes (its
@@ -160,5 +194,12 @@ pub fn fill_depth_keeping(
         .into_iter()
         .map(|[a, b]| [a.into_inner(), b.into_inner()])
         .collect();
-    (depth, Fragments { pieces, inside })
+    (
+        depth,
+        Fragments {
+            pieces,
+            inside,
+            images: image,
+        },
+    )
 }

@@ -61,6 +61,7 @@ fn for_each_list<S>(
             end(state);
             *t += 1;
         },
+        None,
     );
 }
 

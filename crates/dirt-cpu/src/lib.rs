@@ -86,6 +86,12 @@ pub struct Ads {
     /// closest (`fill_depth` finds it while it covers the triangles).
     /// `false` for other sets, where it is not needed.
     pub(crate) sees_all: bool,
+    /// Where `sees_all` holds for a view placed at the rays' origin
+    /// (`params.center`): every triangle's box in the view's image, made by
+    /// `fill_depth` as it covers the triangles. The trace of rays from the
+    /// apex leaves out a listed triangle whose box misses the ray's
+    /// (`trace_fast`). Empty elsewhere: a scene pays for them only there.
+    pub(crate) image_boxes: Vec<trace_fast::ViewBox>,
 }
 
 /// Runs `f` on a thread of rayon's pool (the caller's own, if it is one).
@@ -131,8 +137,15 @@ impl Ads {
         // 1.66x -> 1.79x the structure, peak_memory.rs).
         let tiles = views.slots() * views.views.first().map_or(0, |v| v.tile_count());
         let keep = tiles.saturating_mul(params.buckets as usize);
-        let (depth, fragments) = fill_depth::fill_depth_keeping(&views, tris, keep);
+        // Image boxes for a single view placed where the rays start: the
+        // lanes have each triangle's image range already (trace_fast).
+        let at_origin = views.kind == dirt_core::ViewsKind::Single && params.center.is_some();
+        let (depth, mut fragments) = fill_depth::fill_depth_imaging(&views, tris, keep, at_origin);
         let sees_all = fragments.inside && views.kind == dirt_core::ViewsKind::Single;
+        // Only a view that holds every triangle serves rays from its apex
+        // this way; elsewhere they are freed before the lists are made.
+        let images = std::mem::take(&mut fragments.images);
+        let image_boxes = if sees_all { images } else { Vec::new() };
         let t1 = Instant::now();
         // The depth bounds become Hi-Z level 0, which fill_primitives reads.
         let hiz = mip_depth::mip_depth_over(&views, depth);
@@ -158,6 +171,7 @@ impl Ads {
             timings,
             triangles: tris.len(),
             sees_all,
+            image_boxes,
         })
     }
 
@@ -210,7 +224,7 @@ impl Ads {
         let hiz: u64 = self.hiz.iter().skip(1).map(|l| l.len() as u64 * 8).sum();
         let offsets = self.lists.offsets.len() as u64 * 4;
         let ids = nodes * 4;
-        MemoryReport {
+        let mut report = MemoryReport {
             entries: vec![
                 MemoryEntry {
                     name: "depth bounds",
@@ -245,7 +259,16 @@ impl Ads {
                     model: Some((views * tiles * tiles * 4 * nb + 8 * nodes) as f64),
                 },
             ],
+        };
+        // Only where the build made them (a view at the rays' origin).
+        if !self.image_boxes.is_empty() {
+            report.entries.push(MemoryEntry {
+                name: "image boxes",
+                bytes: std::mem::size_of_val(&self.image_boxes[..]) as u64,
+                model: None,
+            });
         }
+        report
     }
 }
 
@@ -313,7 +336,11 @@ impl MemoryReport {
             .filter(|e| {
                 matches!(
                     e.name,
-                    "depth bounds" | "hi-z levels 1.." | "list offsets" | "list ids"
+                    "depth bounds"
+                        | "hi-z levels 1.."
+                        | "list offsets"
+                        | "list ids"
+                        | "image boxes"
                 )
             })
             .map(|e| e.bytes)

@@ -317,26 +317,31 @@ fn a_tracers_boxes_are_kept_once_its_traces_pay_and_dropped_by_a_build() {
 }
 
 // Rays from the apex of a single view that holds every triangle read each
-// triangle's box in the view's image once they pay: `DirtCpu` computes the
-// boxes in the trace whose rays from the apex, with those traced before it
-// on the build, number one for every 2 triangles, and keeps them until the
-// next build. The hits stay brute force's throughout.
+// triangle's box in the view's image. A build at the rays' origin
+// (`center`) makes them as it covers the triangles, and no trace pays for
+// them again; for a view placed elsewhere, `DirtCpu` computes them in the
+// trace whose rays from the apex, with those traced before it on the
+// build, number one for every 2 triangles, and keeps them until the next
+// build. The hits stay brute force's throughout.
 #[test]
 fn a_tracers_image_boxes_are_kept_once_rays_from_the_apex_pay() {
     use dirt_core::Tracer;
     let mut rng = Rng(91);
     let tris = scene(120, &mut rng);
-    let eye = Vec3::new(0.2, 1.5, 6.0);
-    let p = AdsParams {
+    let at = |center: Option<Vec3>| AdsParams {
         views: ViewsKind::Single,
         resolution: 64,
         buckets: 2,
         tile: 1,
-        center: Some(eye),
+        center,
         axis: None,
     };
-    let mut t = dirt_cpu::DirtCpu::new(p, Traversal::Linear);
-    t.build(&tris).expect("build");
+    let image_bytes = |t: &dirt_cpu::DirtCpu| {
+        let mem = t.ads().expect("built").memory();
+        let e = mem.entries.iter().find(|e| e.name == "image boxes");
+        e.map_or(0, |e| e.bytes as usize)
+    };
+    let apex = |t: &dirt_cpu::DirtCpu| t.ads().expect("built").views.views[0].apex;
     let traced = |t: &mut dirt_cpu::DirtCpu, tris: &[Triangle], rs: &[Ray]| {
         let hits = t.trace(rs).expect("trace");
         let want = dirt_cpu::brute_force::trace(tris, rs);
@@ -344,7 +349,7 @@ fn a_tracers_image_boxes_are_kept_once_rays_from_the_apex_pay() {
             assert_eq!(h.bits(), w.bits(), "ray {k} {:?}", rs[k]);
         }
     };
-    let from_eye = |n: usize, tris: &[Triangle], rng: &mut Rng| -> Vec<Ray> {
+    let from_eye = |eye: Vec3, n: usize, tris: &[Triangle], rng: &mut Rng| -> Vec<Ray> {
         (0..n)
             .map(|k| {
                 let t = &tris[rng.below(tris.len())];
@@ -357,12 +362,27 @@ fn a_tracers_image_boxes_are_kept_once_rays_from_the_apex_pay() {
             })
             .collect()
     };
+    let need = tris.len().div_ceil(2);
+    // At the rays' origin: made by the build, never by a trace.
+    let eye = Vec3::new(0.2, 1.5, 6.0);
+    let mut t = dirt_cpu::DirtCpu::new(at(Some(eye)), Traversal::Linear);
+    t.build(&tris).expect("build");
+    assert_eq!(apex(&t), eye);
+    assert_eq!(image_bytes(&t), tris.len() * 32, "made by the build");
+    for n in [1, need] {
+        traced(&mut t, &tris, &from_eye(eye, n, &tris, &mut rng));
+        assert_eq!(t.boxes_bytes(), 0, "no trace pays for them");
+    }
+    // Placed by the build (outside the scene): the trace pays for them.
+    let mut t = dirt_cpu::DirtCpu::new(at(None), Traversal::Linear);
+    t.build(&tris).expect("build");
+    assert_eq!(image_bytes(&t), 0, "a view not at the rays' origin");
+    let eye = apex(&t);
     // From elsewhere: never counted towards them.
     let elsewhere = rays(tris.len(), &tris, &mut rng);
     traced(&mut t, &tris, &elsewhere);
     let before = t.boxes_bytes();
     // A third of the rays needed, twice, then the rest.
-    let need = tris.len().div_ceil(2);
     let third = need / 3;
     let mut sent = 0;
     for n in [third, third, need - 2 * third] {
@@ -371,16 +391,24 @@ fn a_tracers_image_boxes_are_kept_once_rays_from_the_apex_pay() {
             before,
             "{sent} of {need} rays from the apex"
         );
-        traced(&mut t, &tris, &from_eye(n, &tris, &mut rng));
+        traced(&mut t, &tris, &from_eye(eye, n, &tris, &mut rng));
         sent += n;
     }
     assert_eq!(t.boxes_bytes(), before + tris.len() * 32, "{need} rays pay");
-    traced(&mut t, &tris, &from_eye(third, &tris, &mut rng));
+    traced(&mut t, &tris, &from_eye(eye, third, &tris, &mut rng));
     assert_eq!(t.boxes_bytes(), before + tris.len() * 32, "kept");
-    // A build over other triangles drops them; they are paid for again.
-    let moved = moved(&tris);
+    // A build over other triangles (the same, moved: the view placed for
+    // them still holds them all) drops them; they are paid for again.
+    let moved: Vec<Triangle> = tris
+        .iter()
+        .map(|t| {
+            let s = |k: usize| t.vertex(k) + Vec3::new(0.05, -0.03, 0.02);
+            Triangle::new(s(0), s(1), s(2))
+        })
+        .collect();
     t.build(&moved).expect("rebuild");
     assert_eq!(t.boxes_bytes(), 0, "dropped by the build");
-    traced(&mut t, &moved, &from_eye(need, &moved, &mut rng));
+    let eye = apex(&t);
+    traced(&mut t, &moved, &from_eye(eye, need, &moved, &mut rng));
     assert_eq!(t.boxes_bytes(), moved.len() * 32, "paid again");
 }
