@@ -265,6 +265,25 @@ fn two_tiles(
     ]
 }
 
+/// The image boxes ([`image_box`]) of a group's triangles into `out` (one
+/// per triangle of the group) from their lanes: view-space vertices `tv`
+/// and tile extents `extent` in `v`. Out of line: inlined, it left the
+/// fragments' callback of [`for_each_fragment_in`] out of line instead.
+#[inline(never)]
+fn image_boxes(v: &View, tv: &[[L; 3]; 3], extent: &[L; 4], out: &mut [ViewBox]) {
+    // image_box's tests, side by side.
+    let half = v.near * 0.5;
+    let boxed: [bool; LANES] = from_fn(|k| {
+        (tv[0][2][k] > half)
+            & (tv[1][2][k] > half)
+            & (tv[2][2][k] > half)
+            & extent.iter().all(|e| !e[k].is_nan())
+    });
+    for (k, b) in out.iter_mut().enumerate() {
+        *b = image_box(boxed[k], from_fn(|e| extent[e][k]));
+    }
+}
+
 /// [`for_each_fragment`](crate::fill_depth::for_each_fragment) for every
 /// triangle of `tris` in turn: `item(state, tile, zlo, zhi)` for each of a
 /// triangle's fragments, in its order, then `end(state)`.
@@ -312,18 +331,7 @@ pub(crate) fn for_each_fragment_in<S>(
             let inside = one.then_some(&mut inside);
             let extent = cover_lanes(v, &tri, &mut covers[f], &mut tvs[f], inside);
             if let Some(images) = images.as_deref_mut() {
-                // image_box's tests, side by side.
-                let z = |n: usize| tvs[f][n][2];
-                let half = v.near * 0.5;
-                let boxed: [bool; LANES] = from_fn(|k| {
-                    (z(0)[k] > half)
-                        & (z(1)[k] > half)
-                        & (z(2)[k] > half)
-                        & extent.iter().all(|e| !e[k].is_nan())
-                });
-                for (k, b) in images[g * LANES..][..group.len()].iter_mut().enumerate() {
-                    *b = image_box(boxed[k], from_fn(|e| extent[e][k]));
-                }
+                image_boxes(v, &tvs[f], &extent, &mut images[g * LANES..][..group.len()]);
             }
         }
         for k in 0..group.len() {

@@ -115,9 +115,9 @@
 //!   values its lanes compute anyway ([`Ads::image_boxes`]), and every
 //!   batch from the apex reads them: the deforming grid's build and one
 //!   trace of its 5,000 camera rays (single r128 B2, 1 thread) took 58.3 M
-//!   → 56.1 M instructions, `fill_depth` 30.6 M → 33.8 M (about 100 a
-//!   triangle more), the trace 10.9 M → 5.5 M; the trace alone, best of 30
-//!   on 2 threads, 0.97 → 0.61 ms.
+//!   → 54.5 M instructions, `fill_depth` 30.6 M → 32.2 M (49 a triangle
+//!   more), the trace 10.9 M → 5.5 M; the trace alone, best of 30 on 2
+//!   threads, 0.97 → 0.61 ms.
 //! - Without statistics, the rays of a chunk ([`LOOKS`]) are looked at from
 //!   the apex before any is traced, [`LOOK_LANES`] side by side where the
 //!   tiles' content bits are made ([`Scene::looks_at_apex`], each lane
