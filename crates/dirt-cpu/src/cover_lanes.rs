@@ -271,16 +271,8 @@ fn two_tiles(
 /// fragments' callback of [`for_each_fragment_in`] out of line instead.
 #[inline(never)]
 fn image_boxes(v: &View, tv: &[[L; 3]; 3], extent: &[L; 4], out: &mut [ViewBox]) {
-    // image_box's tests, side by side.
-    let half = v.near * 0.5;
-    let boxed: [bool; LANES] = from_fn(|k| {
-        (tv[0][2][k] > half)
-            & (tv[1][2][k] > half)
-            & (tv[2][2][k] > half)
-            & extent.iter().all(|e| !e[k].is_nan())
-    });
     for (k, b) in out.iter_mut().enumerate() {
-        *b = image_box(boxed[k], from_fn(|e| extent[e][k]));
+        *b = image_box(v, from_fn(|n| tv[n][2][k]), from_fn(|e| extent[e][k]));
     }
 }
 

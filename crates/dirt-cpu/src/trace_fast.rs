@@ -675,24 +675,21 @@ pub(crate) fn apex_boxes(v: &View, tris: &[Triangle]) -> Vec<ViewBox> {
     boxes_of(&mut out, tris, |t| {
         let p: [[f32; 3]; 3] = from_fn(|k| v.to_view(t.vertex(k)));
         let extent = tile_extent(v, &p)?;
-        // Where `View::w` would clamp a depth (not in front of half the near
-        // plane, which a view that holds every triangle has none of), the
-        // image is not the projection; and coordinates that are not numbers
-        // (a degenerate view) bound nothing: never left out.
-        let in_front = p.iter().all(|p| p[2] > v.near * 0.5);
-        Some(image_box(
-            in_front && extent.iter().all(|c| !c.is_nan()),
-            extent,
-        ))
+        Some(image_box(v, p.map(|p| p[2]), extent))
     });
     out
 }
 
-/// [`apex_boxes`]' box of a triangle from its [`tile_extent`]
-/// `[x0, x1, y0, y1]`, where `boxed` (it has one), else [`ViewBox::WHOLE`].
+/// [`apex_boxes`]' box of a triangle whose vertices have the depths `z` in
+/// `v`, from its [`tile_extent`] `[x0, x1, y0, y1]`.
 #[inline(always)]
-pub(crate) fn image_box(boxed: bool, [x0, x1, y0, y1]: [f32; 4]) -> ViewBox {
-    if boxed {
+pub(crate) fn image_box(v: &View, z: [f32; 3], [x0, x1, y0, y1]: [f32; 4]) -> ViewBox {
+    // Where `View::w` would clamp a depth (not in front of half the near
+    // plane, which a view that holds every triangle has none of), the
+    // image is not the projection; and coordinates that are not numbers
+    // (a degenerate view) bound nothing: never left out.
+    let in_front = z.iter().all(|&z| z > v.near * 0.5);
+    if in_front && [x0, x1, y0, y1].iter().all(|c| !c.is_nan()) {
         ViewBox::new([x0, y0, f32::NEG_INFINITY], [x1, y1, f32::INFINITY])
     } else {
         ViewBox::WHOLE
