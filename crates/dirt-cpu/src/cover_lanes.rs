@@ -15,16 +15,16 @@
 //! two tiles, side by side or one above the other, gets each tile's part
 //! from [`two_tiles`]: the one clip a tile takes there, at the middle
 //! boundary, written for a triangle (no polygon copied, only the components
-//! used). One over more tiles goes on to [`cover_tiles`] from its range; one
-//! that crosses the frustum is covered by [`for_each_covered_tile`] alone.
-//! On a deforming grid of small triangles nine in ten take the first two
-//! ways, and the prologue and those clips were most of the coverage's cost.
-//! Ranges of two by two tiles (half of the bunny's triangles at ortho r32,
-//! where they cost 0.4 of fill_depth's 1.0 ms on one thread) stay with
-//! [`cover_tiles`], which clips each tile at the middle boundaries only:
-//! its clips (the outer ones too, as then) on a polygon of at most eight
-//! vertices stored by component measured 6 % slower, and on every lane at
-//! once, as slots under masks, 40 % slower.
+//! used). One whose range is two by two tiles gets them from [`four_tiles`]:
+//! a clip at the middle x boundary per column, then one at the middle y
+//! boundary per tile, written for a triangle like [`two_tiles`] (half of
+//! the bunny's triangles at ortho r32; through [`cover_tiles`]' polygons
+//! they took about three times the instructions). One over more tiles goes on to
+//! [`cover_tiles`] from its range; one that crosses the frustum is covered
+//! by [`for_each_covered_tile`] alone. On a deforming grid of small
+//! triangles nine in ten take the first two ways, and the prologue and
+//! those clips were most of the coverage's cost. (Clipping every lane at
+//! once, as slots under masks, measured 40 % slower than [`cover_tiles`].)
 //! The tests below check that the fragments, their order and their bits
 //! are [`for_each_fragment`]'s on random triangles and views.
 //!
@@ -265,6 +265,67 @@ fn two_tiles(
     ]
 }
 
+/// [`cover_tiles`] on a range of two by two tiles, `(i0, i0 + 1, j0,
+/// j0 + 1)`, for the view-space triangle `tri`: each tile, column by
+/// column, with the triangle's depth extent there, if it reaches it. A
+/// column is the triangle
+/// clipped at the middle x boundary (its one inner x plane), followed as
+/// [`Polygon::clip_into`] makes it but keeping only the y and z of its at
+/// most four vertices; a tile's extent is that polygon clipped at the
+/// middle y boundary, folded into its depth range as
+/// [`Polygon::clipped_depth_range`] folds it. Same operands, same order:
+/// `cover_tiles`' bits, without its polygons (half the bunny's triangles
+/// at ortho r32 take this way).
+///
+/// [`Polygon::clip_into`]: dirt_math::clip::Polygon::clip_into
+/// [`Polygon::clipped_depth_range`]: dirt_math::clip::Polygon::clipped_depth_range
+fn four_tiles(v: &View, tri: [[f32; 3]; 3], (i0, j0): (u32, u32)) -> [TilePart; 4] {
+    let eps = v.eps;
+    // HalfSpace::eval of an axis' Hi (the lower tile's plane) or Lo (the
+    // upper tile's) at slope (or offset) `s`.
+    let plane = |lower: bool, s: f32, a: f32, z: f32| match (lower, v.ortho) {
+        (true, true) => s - a + eps,
+        (true, false) => s * z - a + eps,
+        (false, true) => a - s + eps,
+        (false, false) => a - s * z + eps,
+    };
+    let (bx, by) = (v.boundary(i0 + 1), v.boundary(j0 + 1));
+    let mut parts = [(0, 0, None); 4];
+    for (c, (i, left)) in [(i0, true), (i0 + 1, false)].into_iter().enumerate() {
+        let f: [f32; 3] = from_fn(|n| plane(left, bx, tri[n][0], tri[n][2]));
+        // The column's vertices (a triangle cut by one plane has at most four).
+        let (mut y, mut z, mut m) = ([0.0f32; 4], [0.0f32; 4], 0);
+        for n in 0..3 {
+            let (p, q) = (tri[n], tri[(n + 1) % 3]);
+            let (fp, fq) = (f[n], f[(n + 1) % 3]);
+            if fp >= 0.0 {
+                (y[m & 3], z[m & 3], m) = (p[1], p[2], m + 1);
+            }
+            if (fp >= 0.0) != (fq >= 0.0) {
+                let w = fp / (fp - fq);
+                let (cy, cz) = (p[1] + (q[1] - p[1]) * w, p[2] + (q[2] - p[2]) * w);
+                (y[m & 3], z[m & 3], m) = (cy, cz, m + 1);
+            }
+        }
+        for (r, (j, below)) in [(j0, true), (j0 + 1, false)].into_iter().enumerate() {
+            let g: [f32; 4] = from_fn(|n| plane(below, by, y[n], z[n]));
+            let (mut zlo, mut zhi, mut any) = (f32::INFINITY, f32::NEG_INFINITY, false);
+            for n in 0..m {
+                let next = if n + 1 == m { 0 } else { n + 1 };
+                if g[n] >= 0.0 {
+                    (zlo, zhi, any) = (fmin(zlo, z[n]), fmax(zhi, z[n]), true);
+                }
+                if (g[n] >= 0.0) != (g[next] >= 0.0) {
+                    let c = z[n] + (z[next] - z[n]) * (g[n] / (g[n] - g[next]));
+                    (zlo, zhi, any) = (fmin(zlo, c), fmax(zhi, c), true);
+                }
+            }
+            parts[2 * c + r] = (i, j, any.then_some((zlo - eps, zhi + eps)));
+        }
+    }
+    parts
+}
+
 /// The image boxes ([`image_box`]) of a group's triangles into `out` (one
 /// per triangle of the group) from their lanes: view-space vertices `tv`
 /// and tile extents `extent` in `v`. Out of line: inlined, it left the
@@ -339,6 +400,14 @@ pub(crate) fn for_each_fragment_in<S>(
                     Cover::Nothing => {}
                     Cover::One(i, j, lo, hi) => emit(i, j, lo, hi),
                     Cover::Two(parts) => {
+                        for (i, j, extent) in parts {
+                            if let Some((lo, hi)) = extent {
+                                emit(i, j, lo, hi);
+                            }
+                        }
+                    }
+                    Cover::Range(i0, i1, j0, j1) if i1 == i0 + 1 && j1 == j0 + 1 => {
+                        let parts = four_tiles(v, [vertex(0), vertex(1), vertex(2)], (i0, j0));
                         for (i, j, extent) in parts {
                             if let Some((lo, hi)) = extent {
                                 emit(i, j, lo, hi);
@@ -503,6 +572,42 @@ mod tests {
             // Found inside only where it is, and only for a set of one view.
             prop_assert!(!inside || plain_inside(&views, &tris));
             prop_assert!(!inside || views.slots() == 1);
+        }
+
+        /// four_tiles is cover_tiles on a two by two range, bit for bit, for
+        /// triangles across its middle boundaries (some vertices on them) or
+        /// beside them, in orthographic and perspective views.
+        #[test]
+        fn four_tiles_is_cover_tiles_on_two_by_two(
+            corners in prop::array::uniform3((
+                prop_oneof![4 => -1.5f32..1.5, 1 => Just(0.0f32)],
+                prop_oneof![4 => -1.5f32..1.5, 1 => Just(0.0f32)],
+                0.0f32..1.0,
+            )),
+            kind in 0usize..4,
+            tiles in 2u32..40,
+            at in (0.0f32..1.0, 0.0f32..1.0),
+        ) {
+            let views = view_set(kind, tiles, Vec3::ZERO);
+            let v = views.views.iter().find(|v| v.tiles > 1).expect("a view");
+            let (i0, j0) = ((at.0 * (v.tiles - 1) as f32) as u32, (at.1 * (v.tiles - 1) as f32) as u32);
+            let (i0, j0) = (i0.min(v.tiles - 2), j0.min(v.tiles - 2));
+            // Tile offsets from the middle boundaries, and a depth between the planes.
+            let tri: [[f32; 3]; 3] = corners.map(|(u, w, t)| {
+                let z = v.near + t * (v.far - v.near);
+                let s = |b: u32, o: f32| (v.boundary(b) + o * v.step) * if v.ortho { 1.0 } else { z };
+                [s(i0 + 1, u), s(j0 + 1, w), z]
+            });
+            let poly = Polygon::triangle(tri[0], tri[1], tri[2]);
+            let mut want = Vec::new();
+            cover_tiles(v, &poly, (i0, i0 + 1, j0, j0 + 1), |i, j, lo, hi| {
+                want.push((i, j, lo.to_bits(), hi.to_bits()));
+            });
+            let got: Vec<_> = four_tiles(v, tri, (i0, j0))
+                .into_iter()
+                .filter_map(|(i, j, e)| e.map(|(lo, hi)| (i, j, lo.to_bits(), hi.to_bits())))
+                .collect();
+            prop_assert_eq!(got, want);
         }
 
         /// Triangles well inside a single view, or an orthographic one, are
