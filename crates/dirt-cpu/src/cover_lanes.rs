@@ -18,13 +18,14 @@
 //! used). One whose range is two by two tiles gets them from [`four_tiles`]:
 //! a clip at the middle x boundary per column, then one at the middle y
 //! boundary per tile, written for a triangle like [`two_tiles`] (half of
-//! the bunny's triangles at ortho r32; through [`cover_tiles`]' polygons
-//! they took about three times the instructions). One over more tiles goes on to
-//! [`cover_tiles`] from its range; one that crosses the frustum is covered
-//! by [`for_each_covered_tile`] alone. On a deforming grid of small
-//! triangles nine in ten take the first two ways, and the prologue and
-//! those clips were most of the coverage's cost. (Clipping every lane at
-//! once, as slots under masks, measured 40 % slower than [`cover_tiles`].)
+//! the bunny's triangles at ortho r32, where [`cover_tiles`]' polygons
+//! took 1,860 instructions a triangle and these take 540). One over more
+//! tiles goes on to [`cover_tiles`] from its range; one that crosses the
+//! frustum is covered by [`for_each_covered_tile`] alone. On a deforming
+//! grid of small triangles nine in ten take the first two ways, and the
+//! prologue and those clips were most of the coverage's cost. (Clipping
+//! every lane at once, as slots under masks, measured 40 % slower than
+//! [`cover_tiles`].)
 //! The tests below check that the fragments, their order and their bits
 //! are [`for_each_fragment`]'s on random triangles and views.
 //!
@@ -268,14 +269,12 @@ fn two_tiles(
 /// [`cover_tiles`] on a range of two by two tiles, `(i0, i0 + 1, j0,
 /// j0 + 1)`, for the view-space triangle `tri`: each tile, column by
 /// column, with the triangle's depth extent there, if it reaches it. A
-/// column is the triangle
-/// clipped at the middle x boundary (its one inner x plane), followed as
-/// [`Polygon::clip_into`] makes it but keeping only the y and z of its at
-/// most four vertices; a tile's extent is that polygon clipped at the
-/// middle y boundary, folded into its depth range as
-/// [`Polygon::clipped_depth_range`] folds it. Same operands, same order:
-/// `cover_tiles`' bits, without its polygons (half the bunny's triangles
-/// at ortho r32 take this way).
+/// column is the triangle clipped at the middle x boundary (its one inner
+/// x plane), followed as [`Polygon::clip_into`] makes it but keeping only
+/// the y and z of its at most four vertices; a tile's extent is that
+/// polygon clipped at the middle y boundary, folded into its depth range
+/// as [`Polygon::clipped_depth_range`] folds it. Same operands, same
+/// order: `cover_tiles`' bits, without its polygons.
 ///
 /// [`Polygon::clip_into`]: dirt_math::clip::Polygon::clip_into
 /// [`Polygon::clipped_depth_range`]: dirt_math::clip::Polygon::clipped_depth_range
