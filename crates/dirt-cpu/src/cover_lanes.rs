@@ -202,6 +202,51 @@ fn cover_lanes(
     extent
 }
 
+/// [`HalfSpace::eval`] at a tile boundary of slope (or offset) `s`, of the
+/// point at `a` on the boundary's axis and depth `z`: the lower tile's
+/// plane (the axis' Hi) where `lower`, else the upper tile's (its Lo).
+///
+/// [`HalfSpace::eval`]: dirt_math::clip::HalfSpace::eval
+#[inline(always)]
+fn boundary_eval(v: &View, lower: bool, s: f32, a: f32, z: f32) -> f32 {
+    let eps = v.eps;
+    match (lower, v.ortho) {
+        (true, true) => s - a + eps,
+        (true, false) => s * z - a + eps,
+        (false, true) => a - s + eps,
+        (false, false) => a - s * z + eps,
+    }
+}
+
+/// [`Polygon::clip_into`] of the polygon of depths `z` (its first `m`) by
+/// the plane valued `f` at its vertices, folded into its depth range as
+/// [`Polygon::clipped_depth_range`] folds it (each vertex inside, each
+/// crossing edge's intersection, in order), widened by `eps` as
+/// [`cover_tiles`] does; `None` where nothing is left.
+///
+/// [`Polygon::clip_into`]: dirt_math::clip::Polygon::clip_into
+/// [`Polygon::clipped_depth_range`]: dirt_math::clip::Polygon::clipped_depth_range
+#[inline(always)]
+fn clipped_extent<const N: usize>(
+    f: &[f32; N],
+    z: &[f32; N],
+    m: usize,
+    eps: f32,
+) -> Option<(f32, f32)> {
+    let (mut zlo, mut zhi, mut any) = (f32::INFINITY, f32::NEG_INFINITY, false);
+    for n in 0..m {
+        let next = if n + 1 == m { 0 } else { n + 1 };
+        if f[n] >= 0.0 {
+            (zlo, zhi, any) = (fmin(zlo, z[n]), fmax(zhi, z[n]), true);
+        }
+        if (f[n] >= 0.0) != (f[next] >= 0.0) {
+            let x = z[n] + (z[next] - z[n]) * (f[n] / (f[n] - f[next]));
+            (zlo, zhi, any) = (fmin(zlo, x), fmax(zhi, x), true);
+        }
+    }
+    any.then_some((zlo - eps, zhi + eps))
+}
+
 /// [`cover_tiles`] on a range of two tiles for lane `k`: the lower tile
 /// (index `lower` on the split axis: x where `x_split`, else y) and the
 /// upper, each with the triangle's depth extent there, if it reaches it.
@@ -223,46 +268,15 @@ fn two_tiles(
     lower: u32,
 ) -> [Option<(f32, f32)>; 2] {
     let eps = v.eps;
-    // HalfSpace::eval of the split axis' Lo and Hi at slope (or offset) `s`.
-    let lo = |s: f32, a: f32, z: f32| {
-        if v.ortho {
-            a - s + eps
-        } else {
-            a - s * z + eps
-        }
-    };
-    let hi = |s: f32, a: f32, z: f32| {
-        if v.ortho {
-            s - a + eps
-        } else {
-            s * z - a + eps
-        }
-    };
-    // Polygon::clip_into of the triangle `(a, z)` by the plane valued `f` at
-    // its vertices, folded into its depth range, widened by eps as
-    // cover_tiles does.
-    let extent = |f: [f32; 3], z: [f32; 3]| -> Option<(f32, f32)> {
-        let (mut zlo, mut zhi, mut any) = (f32::INFINITY, f32::NEG_INFINITY, false);
-        for n in 0..3 {
-            let m = (n + 1) % 3;
-            if f[n] >= 0.0 {
-                (zlo, zhi, any) = (fmin(zlo, z[n]), fmax(zhi, z[n]), true);
-            }
-            if (f[n] >= 0.0) != (f[m] >= 0.0) {
-                let x = z[n] + (z[m] - z[n]) * (f[n] / (f[n] - f[m]));
-                (zlo, zhi, any) = (fmin(zlo, x), fmax(zhi, x), true);
-            }
-        }
-        any.then_some((zlo - eps, zhi + eps))
-    };
     let c = if x_split { 0 } else { 1 };
     let a: [f32; 3] = from_fn(|n| tv[n][c][k]);
     let z: [f32; 3] = from_fn(|n| tv[n][2][k]);
     // The middle boundary.
     let b = v.boundary(lower + 1);
+    let f = |lower: bool| -> [f32; 3] { from_fn(|n| boundary_eval(v, lower, b, a[n], z[n])) };
     [
-        extent(from_fn(|n| hi(b, a[n], z[n])), z),
-        extent(from_fn(|n| lo(b, a[n], z[n])), z),
+        clipped_extent(&f(true), &z, 3, eps),
+        clipped_extent(&f(false), &z, 3, eps),
     ]
 }
 
@@ -280,18 +294,10 @@ fn two_tiles(
 /// [`Polygon::clipped_depth_range`]: dirt_math::clip::Polygon::clipped_depth_range
 fn four_tiles(v: &View, tri: [[f32; 3]; 3], (i0, j0): (u32, u32)) -> [TilePart; 4] {
     let eps = v.eps;
-    // HalfSpace::eval of an axis' Hi (the lower tile's plane) or Lo (the
-    // upper tile's) at slope (or offset) `s`.
-    let plane = |lower: bool, s: f32, a: f32, z: f32| match (lower, v.ortho) {
-        (true, true) => s - a + eps,
-        (true, false) => s * z - a + eps,
-        (false, true) => a - s + eps,
-        (false, false) => a - s * z + eps,
-    };
     let (bx, by) = (v.boundary(i0 + 1), v.boundary(j0 + 1));
-    let mut parts = [(0, 0, None); 4];
-    for (c, (i, left)) in [(i0, true), (i0 + 1, false)].into_iter().enumerate() {
-        let f: [f32; 3] = from_fn(|n| plane(left, bx, tri[n][0], tri[n][2]));
+    // One column (`left`: the lower x tile) and its two tiles.
+    let column = |i: u32, left: bool| -> [TilePart; 2] {
+        let f: [f32; 3] = from_fn(|n| boundary_eval(v, left, bx, tri[n][0], tri[n][2]));
         // The column's vertices (a triangle cut by one plane has at most four).
         let (mut y, mut z, mut m) = ([0.0f32; 4], [0.0f32; 4], 0);
         for n in 0..3 {
@@ -306,23 +312,14 @@ fn four_tiles(v: &View, tri: [[f32; 3]; 3], (i0, j0): (u32, u32)) -> [TilePart; 
                 (y[m & 3], z[m & 3], m) = (cy, cz, m + 1);
             }
         }
-        for (r, (j, below)) in [(j0, true), (j0 + 1, false)].into_iter().enumerate() {
-            let g: [f32; 4] = from_fn(|n| plane(below, by, y[n], z[n]));
-            let (mut zlo, mut zhi, mut any) = (f32::INFINITY, f32::NEG_INFINITY, false);
-            for n in 0..m {
-                let next = if n + 1 == m { 0 } else { n + 1 };
-                if g[n] >= 0.0 {
-                    (zlo, zhi, any) = (fmin(zlo, z[n]), fmax(zhi, z[n]), true);
-                }
-                if (g[n] >= 0.0) != (g[next] >= 0.0) {
-                    let c = z[n] + (z[next] - z[n]) * (g[n] / (g[n] - g[next]));
-                    (zlo, zhi, any) = (fmin(zlo, c), fmax(zhi, c), true);
-                }
-            }
-            parts[2 * c + r] = (i, j, any.then_some((zlo - eps, zhi + eps)));
-        }
-    }
-    parts
+        let tile = |below: bool| {
+            let g: [f32; 4] = from_fn(|n| boundary_eval(v, below, by, y[n], z[n]));
+            clipped_extent(&g, &z, m, eps)
+        };
+        [(i, j0, tile(true)), (i, j0 + 1, tile(false))]
+    };
+    let ([a, b], [c, d]) = (column(i0, true), column(i0 + 1, false));
+    [a, b, c, d]
 }
 
 /// The image boxes ([`image_box`]) of a group's triangles into `out` (one
