@@ -260,20 +260,7 @@ pub fn trace_ray_plain(
         exits.push(exit);
     }
     let mut visited = 0u32;
-    // The unvisited view the ray enters first (the first such on ties).
-    let first_unvisited = |visited: u32| -> Option<usize> {
-        let mut best: Option<usize> = None;
-        for f in 0..n {
-            if visited & (1 << f) == 0
-                && !ivs[f].is_empty()
-                && best.is_none_or(|b| ivs[f].t0 < ivs[b].t0)
-            {
-                best = Some(f);
-            }
-        }
-        best
-    };
-    let mut current = first_unvisited(visited);
+    let mut current = next_view(&ivs, visited, None);
     while let Some(f) = current {
         visited |= 1 << f;
         if ivs[f].t0 <= ctx.best.get().t {
@@ -285,14 +272,32 @@ pub fn trace_ray_plain(
                 Traversal::HiZ => hiz(&ctx, &views[f], &vrs[f], ivs[f]),
             }
         }
-        // Across the edge the ray leaves through, else the next view it enters.
-        current = match exits[f].map(|e| ads.views.adjacency.get(f).map(|a| a[e] as usize)) {
-            Some(Some(g)) if visited & (1 << g) == 0 && !ivs[g].is_empty() => Some(g),
-            _ => first_unvisited(visited),
-        };
+        let across = exits[f].and_then(|e| ads.views.adjacency.get(f).map(|a| a[e] as usize));
+        current = next_view(&ivs, visited, across);
     }
     *stats = ctx.stats.get();
     ctx.best.get()
+}
+
+/// The view a ray walks next, given its interval in every view (`ivs`) and
+/// the views it has walked (`visited`, a bit a view): the view `across` the
+/// edge it left the last one through, if it has not walked it and enters
+/// it; else the unvisited view it enters first (the first such on ties).
+/// The first view is `next_view(ivs, 0, None)`.
+pub(crate) fn next_view(ivs: &[Interval], visited: u32, across: Option<usize>) -> Option<usize> {
+    let unvisited = |f: usize| visited & (1 << f) == 0 && !ivs[f].is_empty();
+    match across {
+        Some(g) if unvisited(g) => Some(g),
+        _ => {
+            let mut best: Option<usize> = None;
+            for f in 0..ivs.len() {
+                if unvisited(f) && best.is_none_or(|b| ivs[f].t0 < ivs[b].t0) {
+                    best = Some(f);
+                }
+            }
+            best
+        }
+    }
 }
 
 fn linear(ctx: &Ctx<'_>, v: &View, vr: &ViewRay, iv: Interval) {

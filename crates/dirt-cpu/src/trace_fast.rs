@@ -213,6 +213,7 @@
 
 use crate::Ads;
 use crate::intersect_lanes::{LANES, intersect_closest_lanes};
+use crate::trace::next_view;
 use dirt_core::{RayStats, Traversal, ViewsKind};
 use dirt_math::bucket::{bucket_ceil_depth, bucket_floor_depth, bucket_pair};
 use dirt_math::clip::{HalfSpace, Interval, ray_depth, ray_point, tile_extent, view_frustum};
@@ -1680,20 +1681,7 @@ pub(crate) fn trace_looked<const STATS: bool>(
     }
     let mut st = RayState::<STATS>::new(sc, scratch, ray, looked);
     let mut visited = 0u32;
-    // The unvisited view the ray enters first (the first such on ties).
-    let first_unvisited = |visited: u32| -> Option<usize> {
-        let mut best: Option<usize> = None;
-        for f in 0..n {
-            if visited & (1 << f) == 0
-                && !ivs[f].is_empty()
-                && best.is_none_or(|b| ivs[f].t0 < ivs[b].t0)
-            {
-                best = Some(f);
-            }
-        }
-        best
-    };
-    let mut current = first_unvisited(visited);
+    let mut current = next_view(&ivs[..n], visited, None);
     while let Some(f) = current {
         visited |= 1 << f;
         if ivs[f].t0 <= st.best.t {
@@ -1705,12 +1693,9 @@ pub(crate) fn trace_looked<const STATS: bool>(
                 Traversal::HiZ => st.hiz(f, &vrs[f], ivs[f]),
             }
         }
-        // Across the edge the ray leaves through, else the next view it enters.
         let adjacency = &sc.ads.views.adjacency;
-        current = match exits[f].map(|e| adjacency.get(f).map(|a| a[e] as usize)) {
-            Some(Some(g)) if visited & (1 << g) == 0 && !ivs[g].is_empty() => Some(g),
-            _ => first_unvisited(visited),
-        };
+        let across = exits[f].and_then(|e| adjacency.get(f).map(|a| a[e] as usize));
+        current = next_view(&ivs[..n], visited, across);
     }
     (st.best, st.stats)
 }
