@@ -273,7 +273,8 @@ fn two_tiles(
     let z: [f32; 3] = from_fn(|n| tv[n][2][k]);
     // The middle boundary.
     let b = v.boundary(lower + 1);
-    let f = |lower: bool| -> [f32; 3] { from_fn(|n| boundary_eval(v, lower, b, a[n], z[n])) };
+    // The plane of the lower tile (`low`) or of the upper, at the vertices.
+    let f = |low: bool| -> [f32; 3] { from_fn(|n| boundary_eval(v, low, b, a[n], z[n])) };
     [
         clipped_extent(&f(true), &z, 3, eps),
         clipped_extent(&f(false), &z, 3, eps),
@@ -295,7 +296,10 @@ fn two_tiles(
 fn four_tiles(v: &View, tri: [[f32; 3]; 3], (i0, j0): (u32, u32)) -> [TilePart; 4] {
     let eps = v.eps;
     let (bx, by) = (v.boundary(i0 + 1), v.boundary(j0 + 1));
-    // One column (`left`: the lower x tile) and its two tiles.
+    // One column (`left`: the lower x tile) and its two tiles. A closure
+    // called twice, not a loop over the columns: as a loop the compiler
+    // kept it rolled (the bunny's build, ortho r32: 97.7 M -> 99.2 M
+    // instructions).
     let column = |i: u32, left: bool| -> [TilePart; 2] {
         let f: [f32; 3] = from_fn(|n| boundary_eval(v, left, bx, tri[n][0], tri[n][2]));
         // The column's vertices (a triangle cut by one plane has at most four).
